@@ -1,0 +1,4 @@
+"""The estimators: BLA (linear), and later PNLSS and decoupled PNLSS."""
+from .bla import BLAEstimator
+
+__all__ = ["BLAEstimator"]

@@ -1,0 +1,262 @@
+"""BLAEstimator: best linear approximation and a linear state-space model."""
+from numbers import Integral, Real
+
+import numpy as np
+from sklearn.base import _fit_context
+from sklearn.utils._param_validation import Interval, StrOptions
+
+from ..frequency.bla import periodic_bla, welch_bla
+from ..statespace.linear import modal_parameters, simulate_linear_signal, frequency_response
+from ..statespace.subspace import fd_refine, fd_subspace
+from ..utils.validation import check_period
+from ._base import SignalRegressorBase
+
+__all__ = ["BLAEstimator"]
+
+
+def _to_db_power(x):
+    with np.errstate(divide="ignore"):
+        return 10 * np.log10(x)
+
+
+class BLAEstimator(SignalRegressorBase):
+    """Best linear approximation (BLA) and a linear state-space model of it.
+
+    From periodic multisine data (``period`` set): the nonparametric BLA per
+    excited line, with the noise variance (spread over periods), the total
+    variance (spread over realisations) and the stochastic nonlinear
+    distortion (their difference); the output levels at non-excited odd and
+    even lines reveal odd and even nonlinearities. A discrete-time model
+    ``x(t+1) = A x + B u, y = C x + D u`` of order ``n_states`` is then found
+    by frequency-domain subspace identification weighted by the BLA
+    variance, and refined by a weighted least-squares fit of the FRF.
+
+    Without ``period`` the BLA comes from Welch's H1 estimator on the whole
+    signals (random excitation).
+
+    Parameters
+    ----------
+    n_states : int, default=3
+        Model order.
+    period : int or None, default=None
+        Samples per period. With a period, training signals must hold whole
+        steady-state periods (length a multiple of ``period``); in
+        :meth:`predict` such signals are simulated in periodic steady state and
+        any other signal from rest.
+    fs : float or None, default=None
+        Sampling frequency in Hz, used for reporting only (``frequencies_``,
+        ``natural_frequencies_``); None means cycles per sample.
+    lines : array-like of int or None, default=None
+        Excited DFT bins of one period; found from the input spectrum (-60 dB
+        threshold) when None.
+    refine : bool, default=True
+        Refine the subspace model by weighted nonlinear least squares.
+    feedthrough : bool, default=True
+        Estimate the direct term D (else D = 0).
+    n_block_rows : int or None, default=None
+        Block rows of the subspace's observability matrix; ``2 n_states``
+        when None.
+    nperseg : int or None, default=None
+        Segment length of the Welch estimate (``period=None`` only).
+
+    Attributes
+    ----------
+    A_, B_, C_, D_ : ndarray
+        The linear model.
+    lines_ : ndarray of int
+        Excited DFT bins the BLA is estimated at.
+    frequencies_ : ndarray
+        Their frequencies (Hz, or cycles/sample without ``fs``).
+    frf_ : ndarray of shape (n_lines, n_outputs, n_inputs), complex
+        Nonparametric BLA.
+    frf_var_total_, frf_var_noise_, frf_var_nonlinear_ : ndarray
+        Variances of ``frf_`` (the averaged estimate): total (noise plus
+        stochastic nonlinear distortion), noise, and nonlinear distortion.
+        NaN where the data cannot tell (one period: no noise estimate).
+    frf_model_ : ndarray
+        FRF of the fitted linear model at ``lines_``.
+    output_level_, noise_level_ : ndarray of shape (n_bins, n_outputs)
+        Output power and noise power at every bin of a period (periodic data).
+    line_kind_ : ndarray of int of shape (n_bins,)
+        0 DC, 1 excited, 2 non-excited odd, 3 non-excited even.
+    distortion_levels_ : dict
+        Mean output power in dB at excited lines and at the odd and even
+        detection lines inside the excited band, and the noise level; NaN
+        where no such line exists (e.g. full multisine).
+    natural_frequencies_, damping_ratios_ : ndarray
+        Modal parameters of the model's poles.
+    n_params_ : int
+        Number of model parameters, ``n^2 + n m + p n + p m``.
+    n_realizations_, n_periods_ : int
+    n_features_in_ : int
+        Number of inputs.
+    n_outputs_ : int
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from scipy.signal import lfilter
+    >>> from sklearn_pnlss import BLAEstimator
+    >>> from sklearn_pnlss.signals import multisine
+    >>> X, lines = multisine(256, fs=1.0, f_band=(0.01, 0.4), n_periods=2,
+    ...                      n_realizations=2, random_state=0)
+    >>> y = np.stack([np.tile(lfilter([0.0, 0.5], [1, -0.6], np.tile(x[:256, 0], 3))[-256:], 2)
+    ...               for x in X])[..., None]
+    >>> model = BLAEstimator(n_states=1, period=256).fit(X, y)
+    >>> round(float(np.linalg.eigvals(model.A_)[0].real), 6)
+    0.6
+    """
+
+    _parameter_constraints = {
+        "n_states": [Interval(Integral, 1, None, closed="left")],
+        "period": [Interval(Integral, 2, None, closed="left"), None],
+        "fs": [Interval(Real, 0, None, closed="neither"), None],
+        "lines": ["array-like", None],
+        "refine": ["boolean"],
+        "feedthrough": ["boolean"],
+        "n_block_rows": [Interval(Integral, 2, None, closed="left"), None],
+        "nperseg": [Interval(Integral, 4, None, closed="left"), None],
+    }
+
+    def __init__(
+        self,
+        n_states=3,
+        *,
+        period=None,
+        fs=None,
+        lines=None,
+        refine=True,
+        feedthrough=True,
+        n_block_rows=None,
+        nperseg=None,
+    ):
+        self.n_states = n_states
+        self.period = period
+        self.fs = fs
+        self.lines = lines
+        self.refine = refine
+        self.feedthrough = feedthrough
+        self.n_block_rows = n_block_rows
+        self.nperseg = nperseg
+
+    @_fit_context(prefer_skip_nested_validation=True)
+    def fit(self, X, y):
+        """Estimate the BLA and its linear state-space model.
+
+        Parameters
+        ----------
+        X : array-like of shape (n_signals, n_samples, n_inputs), list of
+            2-D signals, or one 1-D/2-D signal
+            Input signals. With ``period``: steady-state periodic, each a whole
+            number of periods; one signal per realisation.
+        y : signals of shape (..., n_outputs)
+            Measured outputs, same layout and lengths.
+
+        Returns
+        -------
+        self
+        """
+        X_list, y_list = self._validate_fit_data(X, y)
+        period = check_period(self.period)
+        if period is None:
+            self._fit_welch(X_list, y_list)
+        else:
+            self._fit_periodic(X_list, y_list, period)
+        self._fit_parametric()
+        return self
+
+    def _fit_periodic(self, X_list, y_list, period):
+        U_periods, Y_periods = [], []
+        for i, (U, Y) in enumerate(zip(X_list, y_list)):
+            if U.shape[0] % period:
+                raise ValueError(
+                    f"Signal {i} has {U.shape[0]} samples, not a multiple of "
+                    f"period={period}: BLAEstimator.fit needs whole steady-state "
+                    "periods. Trim the signal, or set period=None for a Welch "
+                    "estimate from non-periodic data."
+                )
+            P = U.shape[0] // period
+            U_periods.append(U.reshape(P, period, U.shape[1]))
+            Y_periods.append(Y.reshape(P, period, Y.shape[1]))
+        lines = None if self.lines is None else np.asarray(self.lines, dtype=int)
+        if lines is not None and (lines.min() < 1 or lines.max() > period // 2):
+            raise ValueError(
+                f"lines must be DFT bins between 1 and period // 2 = {period // 2}; "
+                f"got values from {lines.min()} to {lines.max()}."
+            )
+        bla = periodic_bla(U_periods, Y_periods, lines)
+        self._n_per_period = period
+        self.lines_ = bla.lines
+        self.frf_ = bla.frf
+        self.frf_var_total_ = bla.var_total
+        self.frf_var_noise_ = bla.var_noise
+        self.frf_var_nonlinear_ = bla.var_nonlinear
+        self.output_level_ = bla.output_level
+        self.noise_level_ = bla.noise_level
+        self.line_kind_ = bla.line_kind
+        self.n_realizations_ = bla.n_realizations
+        self.n_periods_ = bla.n_periods
+        self.distortion_levels_ = self._distortion_levels()
+
+    def _distortion_levels(self):
+        band = np.zeros_like(self.line_kind_, dtype=bool)
+        band[self.lines_.min() : self.lines_.max() + 1] = True
+        levels = {}
+        for name, kind in (("excited", 1), ("odd", 2), ("even", 3)):
+            sel = band & (self.line_kind_ == kind)
+            levels[name] = float(_to_db_power(np.mean(self.output_level_[sel]))) if sel.any() else np.nan
+        noise = self.noise_level_[band]
+        levels["noise"] = float(_to_db_power(np.mean(noise))) if np.all(np.isfinite(noise)) else np.nan
+        return levels
+
+    def _fit_welch(self, X_list, y_list):
+        n_min = min(U.shape[0] for U in X_list)
+        nperseg = self.nperseg or int(np.clip(2 ** int(np.log2(max(n_min // 4, 1))), 16, 4096))
+        nperseg = min(nperseg, n_min)
+        lines, frf, var = welch_bla(X_list, y_list, nperseg)
+        self._n_per_period = nperseg
+        self.lines_ = lines
+        self.frf_ = frf
+        self.frf_var_total_ = var
+        self.frf_var_noise_ = np.full(var.shape, np.nan)
+        self.frf_var_nonlinear_ = np.full(var.shape, np.nan)
+        self.n_realizations_ = len(X_list)
+        self.n_periods_ = 0
+        self.distortion_levels_ = {k: np.nan for k in ("excited", "odd", "even", "noise")}
+
+    def _fit_parametric(self):
+        z = np.exp(2j * np.pi * self.lines_ / self._n_per_period)
+        var = self.frf_var_total_
+        if var is not None and not np.all(np.isfinite(var)):
+            var = None
+        n_lines, p, m = self.frf_.shape
+        if n_lines * m < 2 * self.n_states + 1:
+            raise ValueError(
+                f"{n_lines} excited line(s) cannot determine a model with "
+                f"n_states={self.n_states}; use longer signals or a lower n_states."
+            )
+        q = self.n_block_rows or max(self.n_states + 1, 2 * self.n_states)
+        q = min(q, max(self.n_states + 1, (n_lines * m - self.n_states) // m))
+        A, B, C, D = fd_subspace(self.frf_, z, self.n_states, var=var, q=q, estimate_d=self.feedthrough)
+        if self.refine:
+            A, B, C, D = fd_refine(A, B, C, D, self.frf_, z, var=var, estimate_d=self.feedthrough)
+        self.A_, self.B_, self.C_, self.D_ = A, B, C, D
+        self.frf_model_ = frequency_response(A, B, C, D, z)
+        fs = 1.0 if self.fs is None else float(self.fs)
+        self.frequencies_ = self.lines_ * fs / self._n_per_period
+        self.natural_frequencies_, self.damping_ratios_ = modal_parameters(A, fs)
+        n = self.n_states
+        self.n_params_ = n * n + n * m + p * n + p * m
+
+    def _predict_signal(self, U, periodic):
+        period = self.period if periodic else None
+        return simulate_linear_signal(self.A_, self.B_, self.C_, self.D_, U, periodic_with=period)
+
+    def plot(self, ax=None):
+        """FRF of the BLA with the noise and nonlinear distortion levels.
+
+        See :func:`sklearn_pnlss.plotting.plot_bla`.
+        """
+        from ..plotting import plot_bla
+
+        return plot_bla(self, ax=ax)

@@ -1,0 +1,128 @@
+"""Discrete-time linear state-space models: simulation, frequency response,
+periodic steady state and modal parameters."""
+import numba
+import numpy as np
+
+__all__ = [
+    "simulate_linear",
+    "frequency_response",
+    "periodic_initial_state",
+    "simulate_linear_signal",
+    "modal_parameters",
+    "is_stable",
+    "stabilize",
+]
+
+
+@numba.njit(cache=True, nogil=True)
+def _lsim_kernel(A, B, C, D, U, x0):
+    n_samples = U.shape[0]
+    n = A.shape[0]
+    Y = np.empty((n_samples, C.shape[0]))
+    x = x0.copy()
+    xn = np.empty(n)
+    for t in range(n_samples):
+        Y[t] = C @ x + D @ U[t]
+        xn[:] = A @ x + B @ U[t]
+        x[:] = xn
+    return Y, x
+
+
+def simulate_linear(A, B, C, D, U, x0=None):
+    """Simulate ``x(t+1) = A x + B u``, ``y = C x + D u`` from ``x0``.
+
+    Parameters
+    ----------
+    A, B, C, D : ndarray
+        State-space matrices, shapes (n, n), (n, m), (p, n), (p, m).
+    U : ndarray of shape (n_samples, m)
+    x0 : ndarray of shape (n,), default=None (zero state)
+
+    Returns
+    -------
+    Y : ndarray of shape (n_samples, p)
+    x_end : ndarray of shape (n,), the state after the last sample
+    """
+    A, B, C, D = (np.ascontiguousarray(M, dtype=np.float64) for M in (A, B, C, D))
+    U = np.ascontiguousarray(U, dtype=np.float64)
+    x0 = np.zeros(A.shape[0]) if x0 is None else np.asarray(x0, dtype=np.float64)
+    return _lsim_kernel(A, B, C, D, U, x0)
+
+
+def frequency_response(A, B, C, D, z):
+    """``G(z) = D + C (zI - A)^-1 B`` at complex points ``z``.
+
+    Returns
+    -------
+    G : ndarray of shape (len(z), p, m), complex
+    """
+    z = np.atleast_1d(np.asarray(z, dtype=complex))
+    n = A.shape[0]
+    resolvent = z[:, None, None] * np.eye(n) - A  # (K, n, n)
+    XB = np.linalg.solve(resolvent, np.broadcast_to(B, (len(z),) + B.shape))
+    return D[None] + C[None] @ XB
+
+
+def periodic_initial_state(A, B, C, D, U_period):
+    """State at the start of a period in periodic steady state.
+
+    One period simulated from rest ends in ``x_N``; the steady state obeys
+    ``x0 = A^N x0 + x_N``, so ``x0 = (I - A^N)^-1 x_N``. Exact for a stable
+    model and a periodic input.
+    """
+    n = A.shape[0]
+    _, x_end = simulate_linear(A, B, C, D, U_period)
+    AN = np.linalg.matrix_power(A, U_period.shape[0])
+    return np.linalg.solve(np.eye(n) - AN, x_end)
+
+
+def simulate_linear_signal(A, B, C, D, U, periodic_with=None):
+    """Simulate one signal; periodic steady state when ``periodic_with`` gives
+    the period length (the signal's length is a multiple of it), else from
+    rest."""
+    x0 = None
+    if periodic_with is not None:
+        x0 = periodic_initial_state(A, B, C, D, U[:periodic_with])
+    return simulate_linear(A, B, C, D, U, x0)[0]
+
+
+def is_stable(A, margin=0.0):
+    """All eigenvalues strictly inside the circle of radius ``1 - margin``."""
+    return bool(np.all(np.abs(np.linalg.eigvals(A)) < 1.0 - margin))
+
+
+def stabilize(A):
+    """Reflect eigenvalues outside the unit circle to ``1 / conj(lambda)``.
+
+    The amplitude response is kept (up to a constant) while the model becomes
+    stable, the usual remedy for a subspace estimate with an unstable pole.
+    """
+    lam, V = np.linalg.eig(A)
+    outside = np.abs(lam) >= 1.0
+    if not np.any(outside):
+        return A
+    lam = np.where(outside, 1.0 / np.conj(lam), lam)
+    lam = np.where(np.abs(lam) >= 1.0, lam / np.abs(lam) * (1 - 1e-6), lam)
+    return np.real(V @ np.diag(lam) @ np.linalg.inv(V))
+
+
+def modal_parameters(A, fs):
+    """Natural frequencies (Hz) and damping ratios of the poles of ``A``.
+
+    Discrete poles ``z`` map to ``s = fs log z``; each complex pair appears
+    once (positive imaginary part), real poles have damping 1 (or more for
+    ``z`` on the negative axis this mapping is only indicative).
+
+    Returns
+    -------
+    frequencies : ndarray, Hz, sorted
+    damping : ndarray, same order
+    """
+    z = np.linalg.eigvals(A)
+    z = z[np.imag(z) >= -1e-12]
+    s = fs * np.log(z.astype(complex))
+    wn = np.abs(s)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        zeta = np.where(wn > 0, -np.real(s) / wn, 1.0)
+    order = np.argsort(wn)
+    return wn[order] / (2 * np.pi), zeta[order]
