@@ -36,8 +36,11 @@ def plot_bla(estimator, ax=None, output=0, input=0):
         (estimator.frf_var_nonlinear_, "nonlinear distortion std", "C2"),
     ):
         v = var[:, output, input]
-        if np.any(np.isfinite(v)):
-            ax.plot(f, 10 * np.log10(np.maximum(v, 1e-300)), style, lw=0.8, label=label)
+        # A zero estimate (distortion below the noise) has no level: leave a gap.
+        level = np.full(v.shape, np.nan)
+        np.log10(v, out=level, where=np.isfinite(v) & (v > 0))
+        if np.any(np.isfinite(level)):
+            ax.plot(f, 10 * level, style, lw=0.8, label=label)
     ax.plot(f, to_db(np.abs(G - estimator.frf_model_[:, output, input])), "C4:", lw=0.8, label="model error")
     ax.set_xlabel("frequency (Hz)" if estimator.fs else "frequency (cycles/sample)")
     ax.set_ylabel("amplitude (dB)")
