@@ -1,0 +1,20 @@
+"""Physical simulators: an oscillator with nonlinear force elements.
+
+The integrator, resampling and noise reproduce the procedure behind the
+Bouc-Wen benchmark data (see :func:`sklearn_pnlss.datasets.simulate_bouc_wen`).
+"""
+from .forces import BoucWen, CubicStiffness, ForceElement
+from .oscillator import FineSimulation, Oscillator, band_limited_noise
+from .resampling import decimate_fir, fir_decimation_filter, upsample_fft
+
+__all__ = [
+    "BoucWen",
+    "CubicStiffness",
+    "FineSimulation",
+    "ForceElement",
+    "Oscillator",
+    "band_limited_noise",
+    "decimate_fir",
+    "fir_decimation_filter",
+    "upsample_fft",
+]

@@ -1,0 +1,274 @@
+"""Compiled Newmark / trapezoidal integrator of the oscillator with force elements.
+
+Equation: ``m ydd + c yd + k y + sum_e F_e(y, yd, z_e) = u`` with internal
+states ``zd_e = g_e(y, yd, z_e)``.  ``y`` uses Newmark average acceleration
+(a = 1/2, b = 1/4), ``z`` the trapezoidal rule, and every step is solved by
+Newton-Raphson on ``q = [y_{n+1}, z_{n+1}]`` with the exact Jacobian, because
+the benchmark data were produced that way and only a fully converged solve
+reproduces them to round-off.
+
+Adding a force element type: write ``_xxx_force`` and (if it has internal
+states) ``_xxx_rate`` below, add one branch to ``_force`` and ``_rate`` and a
+class with the same kind code in :mod:`.forces`.
+"""
+import numpy as np
+from numba import njit
+
+from .forces import KIND_BOUC_WEN, KIND_CUBIC_STIFFNESS
+
+_JIT = dict(cache=True, nogil=True)
+
+# Layout of the carried state vector: [y, yd, ydd, z_0..z_{nz-1}, zd_0..zd_{nz-1}].
+STATE_Y, STATE_YD, STATE_YDD, STATE_Z = 0, 1, 2, 3
+
+
+# --------------------------------------------------------------------------
+# Element kernels.  ``_xxx_force`` returns (F, dF/dy, dF/dyd) and fills
+# dF/dz; ``_xxx_rate`` fills g, dg/dy, dg/dyd and the square block dg/dz.
+# --------------------------------------------------------------------------
+@njit(**_JIT)
+def _bouc_wen_force(p, y, yd, z, dfdz):
+    dfdz[0] = 1.0
+    return z[0], 0.0, 0.0
+
+
+@njit(**_JIT)
+def _bouc_wen_rate(p, y, yd, z, g, dgdy, dgdyd, dgdz):
+    alpha, beta, gamma, delta, nu = p[0], p[1], p[2], p[3], p[4]
+    zz = z[0]
+    az = abs(zz)
+    sz = np.sign(zz)
+    if nu == 1.0:
+        # Exact shortcut: avoids pow() in the hot loop for the benchmark case.
+        pow_nu = az
+        pow_nu1 = 1.0
+    else:
+        pow_nu1 = az ** (nu - 1.0)
+        pow_nu = pow_nu1 * az
+    ayd = abs(yd)
+    g[0] = alpha * yd - beta * (gamma * ayd * pow_nu1 * zz + delta * yd * pow_nu)
+    dgdy[0] = 0.0
+    dgdyd[0] = alpha - beta * (gamma * np.sign(yd) * pow_nu1 * zz + delta * pow_nu)
+    # d(|z|^(nu-1) z)/dz = nu |z|^(nu-1);  d|z|^nu/dz = nu |z|^(nu-1) sign(z)
+    dgdz[0, 0] = -beta * nu * pow_nu1 * (gamma * ayd + delta * yd * sz)
+
+
+@njit(**_JIT)
+def _cubic_force(p, y, yd, z, dfdz):
+    return p[0] * y * y * y, 3.0 * p[0] * y * y, 0.0
+
+
+@njit(**_JIT)
+def _force(kind, p, y, yd, z, dfdz):
+    if kind == KIND_BOUC_WEN:
+        return _bouc_wen_force(p, y, yd, z, dfdz)
+    elif kind == KIND_CUBIC_STIFFNESS:
+        return _cubic_force(p, y, yd, z, dfdz)
+    return np.nan, np.nan, np.nan  # unknown kind: poison the result, never hang
+
+
+@njit(**_JIT)
+def _rate(kind, p, y, yd, z, g, dgdy, dgdyd, dgdz):
+    if kind == KIND_BOUC_WEN:
+        _bouc_wen_rate(p, y, yd, z, g, dgdy, dgdyd, dgdz)
+    else:
+        for j in range(g.shape[0]):
+            g[j] = np.nan
+
+
+# --------------------------------------------------------------------------
+# Helpers
+# --------------------------------------------------------------------------
+@njit(**_JIT)
+def _solve_inplace(a, b, n):
+    """Solve a x = b (n x n, partial pivoting); the solution overwrites b."""
+    for col in range(n):
+        piv = col
+        best = abs(a[col, col])
+        for r in range(col + 1, n):
+            v = abs(a[r, col])
+            if v > best:
+                best = v
+                piv = r
+        if piv != col:
+            for j in range(n):
+                tmp = a[col, j]
+                a[col, j] = a[piv, j]
+                a[piv, j] = tmp
+            tmp = b[col]
+            b[col] = b[piv]
+            b[piv] = tmp
+        d = a[col, col]
+        for r in range(col + 1, n):
+            f = a[r, col] / d
+            if f != 0.0:
+                for j in range(col, n):
+                    a[r, j] -= f * a[col, j]
+                b[r] -= f * b[col]
+    for r in range(n - 1, -1, -1):
+        s = b[r]
+        for j in range(r + 1, n):
+            s -= a[r, j] * b[j]
+        b[r] = s / a[r, r]
+
+
+@njit(**_JIT)
+def _total_force_and_rates(kinds, p_off, params, z_off, y, yd, z, zd, dfdz, dgdy, dgdyd, dgdz):
+    """Sum of element forces at (y, yd, z); fills the state rates zd."""
+    total = 0.0
+    for e in range(kinds.shape[0]):
+        a, b = z_off[e], z_off[e + 1]
+        pe = params[p_off[e]:p_off[e + 1]]
+        f, _, _ = _force(kinds[e], pe, y, yd, z[a:b], dfdz[a:b])
+        total += f
+        if b > a:
+            _rate(kinds[e], pe, y, yd, z[a:b], zd[a:b], dgdy[a:b], dgdyd[a:b], dgdz[a:b, a:b])
+    return total
+
+
+# --------------------------------------------------------------------------
+# Integrator
+# --------------------------------------------------------------------------
+@njit(**_JIT)
+def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
+                init_accel, y_out, yd_out, z_out, rtol, max_iter):
+    """Integrate ``n_steps`` steps of length ``h`` from ``state`` (updated in place).
+
+    Step ``i`` goes from time ``i h`` to ``(i + 1) h`` with input
+    ``u[(i + 1) % len(u)]`` (so a periodic input of one period can be run
+    period after period).  Sample ``i`` of the outputs is the state at time
+    ``i h`` (only the first ``len(y_out)`` samples are stored).
+
+    Returns
+    -------
+    n_failed : int
+        Steps where Newton did not reach ``rtol`` within ``max_iter``.
+    n_iter : int
+        Total Newton iterations (diagnostics).
+    """
+    nz = z_off[z_off.shape[0] - 1]
+    n = 1 + nz
+    n_u = u.shape[0]
+    n_out = y_out.shape[0]
+
+    y = state[STATE_Y]
+    yd = state[STATE_YD]
+    ydd = state[STATE_YDD]
+    z = state[STATE_Z:STATE_Z + nz].copy()
+    zd = state[STATE_Z + nz:STATE_Z + 2 * nz].copy()
+
+    q = np.zeros(n)
+    res = np.zeros(n)
+    jac = np.zeros((n, n))
+    peak = np.zeros(n)
+    dfdz = np.zeros(nz)
+    g = np.zeros(nz)
+    dgdy = np.zeros(nz)
+    dgdyd = np.zeros(nz)
+    dgdz = np.zeros((nz, nz))
+
+    if init_accel:
+        # Start from equilibrium of the equation of motion at t = 0.
+        ftot = _total_force_and_rates(kinds, p_off, params, z_off, y, yd, z, zd,
+                                      dfdz, dgdy, dgdyd, dgdz)
+        ydd = (u[0] - c * yd - k * y - ftot) / m
+
+    peak[0] = abs(y)
+    for j in range(nz):
+        peak[1 + j] = abs(z[j])
+
+    c_acc = 4.0 / (h * h)
+    c_vel = 2.0 / h
+    jac_lin = m * c_acc + c * c_vel + k
+    n_failed = 0
+    n_iter = 0
+
+    for i in range(n_steps + 1):
+        if i < n_out:
+            y_out[i] = y
+            yd_out[i] = yd
+            for j in range(nz):
+                z_out[i, j] = z[j]
+        if i == n_steps:
+            break
+        u1 = u[(i + 1) % n_u]
+
+        # Predictor: ydd_{n+1} = 0 and zd_{n+1} = 0.
+        q[0] = y + h * yd + 0.25 * h * h * ydd
+        for j in range(nz):
+            q[1 + j] = z[j] + 0.5 * h * zd[j]
+
+        converged = False
+        for it in range(max_iter):
+            n_iter += 1
+            y1 = q[0]
+            yd1 = c_vel * (y1 - y) - yd
+            ydd1 = c_acc * (y1 - y - h * yd) - ydd
+            for r in range(n):
+                for j in range(n):
+                    jac[r, j] = 0.0
+            res[0] = m * ydd1 + c * yd1 + k * y1 - u1
+            jac[0, 0] = jac_lin
+            for e in range(kinds.shape[0]):
+                a, b = z_off[e], z_off[e + 1]
+                pe = params[p_off[e]:p_off[e + 1]]
+                ze = q[1 + a:1 + b]
+                f, dfdy, dfdyd = _force(kinds[e], pe, y1, yd1, ze, dfdz[a:b])
+                res[0] += f
+                jac[0, 0] += dfdy + dfdyd * c_vel
+                for j in range(a, b):
+                    jac[0, 1 + j] = dfdz[j]
+                if b > a:
+                    _rate(kinds[e], pe, y1, yd1, ze, g[a:b], dgdy[a:b], dgdyd[a:b],
+                          dgdz[a:b, a:b])
+                    for j in range(a, b):
+                        res[1 + j] = q[1 + j] - z[j] - 0.5 * h * (zd[j] + g[j])
+                        jac[1 + j, 0] = -0.5 * h * (dgdy[j] + dgdyd[j] * c_vel)
+                        for l in range(a, b):
+                            jac[1 + j, 1 + l] = -0.5 * h * dgdz[j, l]
+                        jac[1 + j, 1 + j] += 1.0
+            for j in range(n):
+                res[j] = -res[j]
+            if n == 1:
+                res[0] /= jac[0, 0]
+            else:
+                _solve_inplace(jac, res, n)
+            ok = True
+            finite = True
+            for j in range(n):
+                q[j] += res[j]
+                if not np.isfinite(q[j]):
+                    finite = False
+                scale = max(abs(q[j]), peak[j])
+                if abs(res[j]) > rtol * scale:
+                    ok = False
+            if not finite:
+                break
+            if ok:
+                converged = True
+                break
+        if not converged:
+            n_failed += 1
+
+        y1 = q[0]
+        yd1 = c_vel * (y1 - y) - yd
+        ydd = c_acc * (y1 - y - h * yd) - ydd
+        y = y1
+        yd = yd1
+        for j in range(nz):
+            z[j] = q[1 + j]
+        if nz > 0:
+            # Rates at the converged point, as the next step's trapezoid needs.
+            _total_force_and_rates(kinds, p_off, params, z_off, y, yd, z, zd,
+                                   dfdz, dgdy, dgdyd, dgdz)
+        peak[0] = max(peak[0], abs(y))
+        for j in range(nz):
+            peak[1 + j] = max(peak[1 + j], abs(z[j]))
+
+    state[STATE_Y] = y
+    state[STATE_YD] = yd
+    state[STATE_YDD] = ydd
+    for j in range(nz):
+        state[STATE_Z + j] = z[j]
+        state[STATE_Z + nz + j] = zd[j]
+    return n_failed, n_iter
