@@ -1,4 +1,5 @@
-"""The estimators: BLA (linear), and later PNLSS and decoupled PNLSS."""
+"""The estimators: BLA (linear) and polynomial nonlinear state-space."""
 from .bla import BLAEstimator
+from .pnlss import PNLSSRegressor
 
-__all__ = ["BLAEstimator"]
+__all__ = ["BLAEstimator", "PNLSSRegressor"]
