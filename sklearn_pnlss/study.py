@@ -18,7 +18,7 @@ from .metrics import rms_error
 
 __all__ = ["run_study", "main"]
 
-MODELS = ("bla",)
+MODELS = ("bla", "pnlss")
 
 
 class _Steps:
@@ -56,12 +56,18 @@ def _score(model, X, y):
 
 
 def _fit_models(names, data, verbose):
-    from .estimators import BLAEstimator
+    from .estimators import BLAEstimator, PNLSSRegressor
 
     fitted = {}
     for name in names:
         if name == "bla":
             model = BLAEstimator(n_states=3, period=data.period, fs=data.fs)
+        elif name == "pnlss":
+            # Noel et al. 2017's model: states only, degrees 2-3, 64 parameters.
+            model = PNLSSRegressor(
+                n_states=3, degrees=(2, 3), variables="states", period=data.period,
+                max_iter=40, verbose=verbose,
+            )
         else:  # pragma: no cover - guarded by argparse choices
             raise ValueError(f"unknown model {name!r}")
         t0 = time.perf_counter()
@@ -124,7 +130,7 @@ def run_study(
         test_source = "official"
         steps.done()
     steps.start("fitting " + ", ".join(models))
-    fitted = _fit_models(models, data, verbose=False)
+    fitted = _fit_models(models, data, verbose=0)
     steps.done()
     steps.start("scoring on the test multisine and sweep")
     rows, preds = [], {}
