@@ -43,34 +43,50 @@ def _monomials(s, exps, out, dout, pw):
 
 
 @numba.njit(cache=True, nogil=True)
+def _workspace(exE, exF, nv):
+    """Scratch arrays (powers, zeta, dzeta, eta, deta, s) for one pass."""
+    max_deg = 1
+    for j in range(exE.shape[0]):
+        max_deg = max(max_deg, exE[j].sum())
+    for j in range(exF.shape[0]):
+        max_deg = max(max_deg, exF[j].sum())
+    return (
+        np.empty((nv, max_deg + 1)),
+        np.empty(exE.shape[0]),
+        np.empty((exE.shape[0], nv)),
+        np.empty(exF.shape[0]),
+        np.empty((exF.shape[0], nv)),
+        np.empty(nv),
+    )
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _nonlinear_terms(x, u, exE, exF, ws):
+    """zeta, eta and their derivatives at s = [x; u], into the workspace."""
+    pw, zeta, dzeta, eta, deta, s = ws
+    n = x.shape[0]
+    for i in range(n):
+        s[i] = x[i]
+    for i in range(u.shape[0]):
+        s[n + i] = u[i]
+    _monomials(s, exE, zeta, dzeta, pw)
+    _monomials(s, exF, eta, deta, pw)
+
+
+@numba.njit(cache=True, nogil=True)
 def pnlss_simulate(A, B, C, D, E, F, exE, exF, U, x0):
     """Simulate; returns (Y, X, n_ok, x_end). n_ok < len(U) means the state
     left the range (divergence) after sample n_ok - 1."""
     N, m = U.shape
     n = A.shape[0]
     p = C.shape[0]
-    nv = n + m
-    max_deg = 1
-    for j in range(exE.shape[0]):
-        max_deg = max(max_deg, exE[j].sum())
-    for j in range(exF.shape[0]):
-        max_deg = max(max_deg, exF[j].sum())
-    pw = np.empty((nv, max_deg + 1))
-    zeta = np.empty(exE.shape[0])
-    dzeta = np.empty((exE.shape[0], nv))
-    eta = np.empty(exF.shape[0])
-    deta = np.empty((exF.shape[0], nv))
-    s = np.empty(nv)
+    ws = _workspace(exE, exF, n + m)
+    zeta, eta = ws[1], ws[3]
     Y = np.zeros((N, p))
     X = np.zeros((N, n))
     x = x0.copy()
     for t in range(N):
-        for i in range(n):
-            s[i] = x[i]
-        for i in range(m):
-            s[n + i] = U[t, i]
-        _monomials(s, exE, zeta, dzeta, pw)
-        _monomials(s, exF, eta, deta, pw)
+        _nonlinear_terms(x, U[t], exE, exF, ws)
         X[t] = x
         Y[t] = C @ x + D @ U[t] + F @ eta
         x = A @ x + B @ U[t] + E @ zeta
@@ -95,29 +111,15 @@ def pnlss_jacobian(A, B, C, D, E, F, exE, exF, U, x0, n_skip, J):
     oC = n_sx
     oD = oC + p * n
     oF = oD + p * m
-    max_deg = 1
-    for j in range(nE):
-        max_deg = max(max_deg, exE[j].sum())
-    for j in range(nF):
-        max_deg = max(max_deg, exF[j].sum())
-    pw = np.empty((nv, max_deg + 1))
-    zeta = np.empty(nE)
-    dzeta = np.empty((nE, nv))
-    eta = np.empty(nF)
-    deta = np.empty((nF, nv))
-    s = np.empty(nv)
+    ws = _workspace(exE, exF, nv)
+    zeta, dzeta, eta, deta = ws[1], ws[2], ws[3], ws[4]
     Sx = np.zeros((n, n_sx))
     Sx_new = np.empty((n, n_sx))
     Ax = np.empty((n, n))  # A + E dzeta/dx
     Cx = np.empty((p, n))  # C + F deta/dx
     x = x0.copy()
     for t in range(N):
-        for i in range(n):
-            s[i] = x[i]
-        for i in range(m):
-            s[n + i] = U[t, i]
-        _monomials(s, exE, zeta, dzeta, pw)
-        _monomials(s, exF, eta, deta, pw)
+        _nonlinear_terms(x, U[t], exE, exF, ws)
         for i in range(n):
             for k in range(n):
                 acc = A[i, k]
