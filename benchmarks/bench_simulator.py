@@ -134,7 +134,7 @@ def run(data_dir, repeat):
           f"{timing['simulate_sweep_153000']['median_s']:.3f} s")
     for n_jobs in (1, 2):
         key = f"make_bouc_wen_n_jobs_{n_jobs}"
-        timing[key], _ = _timeit(lambda: make_bouc_wen(random_state=0, n_jobs=n_jobs), repeat)
+        timing[key], _ = _timeit(lambda n_jobs=n_jobs: make_bouc_wen(random_state=0, n_jobs=n_jobs), repeat)
         print(f"  make_bouc_wen() (2 x 2 periods + tests), n_jobs={n_jobs}:    "
               f"{timing[key]['median_s']:.3f} s")
     results["timing"] = timing

@@ -5,7 +5,6 @@ for i.i.d. samples cannot hold; each is listed here with its reason.
 """
 import inspect
 
-import pytest
 from sklearn.base import BaseEstimator
 from sklearn.utils.estimator_checks import parametrize_with_checks
 

@@ -70,7 +70,6 @@ def test_recovers_a_pnlss_system_and_reports_user_units():
 
 
 def test_divergent_prediction_raises_clear_error():
-    rng = np.random.default_rng(1)
     N = 128
     X, _ = multisine(N, fs=1.0, f_band=(0.01, 0.45), rms=0.3, n_periods=2, n_realizations=2, random_state=2)
     y = X + 0.3 * X**3

@@ -1,7 +1,7 @@
 """What every dynamic-model estimator of the library shares: the signal
 convention, periodic steady state, the rms-dB score and scikit-learn tags."""
-import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin
+from sklearn.utils.validation import check_is_fitted
 
 from ..metrics import rms_error
 from ..utils.validation import is_periodic, restore_layout, signal_layout, validate_signals
@@ -12,9 +12,10 @@ __all__ = ["SignalRegressorBase"]
 class SignalRegressorBase(RegressorMixin, BaseEstimator):
     """Base for regressors mapping input signals to output signals.
 
-    Subclasses implement ``_fit_signals(X_list, y_list)`` and
-    ``_predict_signal(U, periodic)`` on 2-D arrays; this base validates
-    inputs, remembers the output layout and scores in dB.
+    Subclasses implement ``fit`` (starting with ``_validate_fit_data``) and
+    ``_predict_signal(U, periodic)`` on one 2-D signal; this base validates
+    inputs, simulates every signal in the layout it came in, and scores in
+    dB.
     """
 
     def _validate_fit_data(self, X, y):
@@ -48,7 +49,7 @@ class SignalRegressorBase(RegressorMixin, BaseEstimator):
         -------
         y_pred : signals in the layout of ``X`` with ``n_outputs`` channels
         """
-        self._check_is_fitted()
+        check_is_fitted(self)
         X_list, _, layout = validate_signals(self, X, reset=False, min_samples=1)
         out = [self._predict_signal(U, self._signal_is_periodic(U.shape[0])) for U in X_list]
         return restore_layout(out, layout, squeeze_1d=getattr(self, "_y_was_1d", False))
@@ -73,11 +74,6 @@ class SignalRegressorBase(RegressorMixin, BaseEstimator):
         if sample_weight is not None:
             raise ValueError("sample_weight is not supported by dynamic models; pass None.")
         return -rms_error(y, self.predict(X), db=True)
-
-    def _check_is_fitted(self):
-        from sklearn.utils.validation import check_is_fitted
-
-        check_is_fitted(self)
 
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()

@@ -3,7 +3,7 @@ from numbers import Integral, Real
 
 import numpy as np
 from sklearn.base import _fit_context
-from sklearn.utils._param_validation import Interval, StrOptions
+from sklearn.utils._param_validation import Interval
 
 from ..frequency.bla import periodic_bla, welch_bla
 from ..statespace.linear import modal_parameters, simulate_linear_signal, frequency_response
@@ -227,7 +227,7 @@ class BLAEstimator(SignalRegressorBase):
     def _fit_parametric(self):
         z = np.exp(2j * np.pi * self.lines_ / self._n_per_period)
         var = self.frf_var_total_
-        if var is not None and not np.all(np.isfinite(var)):
+        if not np.all(np.isfinite(var)):
             var = None
         n_lines, p, m = self.frf_.shape
         if n_lines * m < 2 * self.n_states + 1:

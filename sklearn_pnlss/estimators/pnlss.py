@@ -182,8 +182,8 @@ class PNLSSRegressor(SignalRegressorBase):
         states = []
         for U in X_list:
             per = period if self._signal_is_periodic(U.shape[0]) else None
-            Ab = np.vstack([np.eye(n), np.zeros((0, n))])
-            states.append(simulate_linear_signal(A, B, Ab, np.zeros((n, m)), U, periodic_with=per))
+            # Output the states themselves (C = I, D = 0) to measure their rms.
+            states.append(simulate_linear_signal(A, B, np.eye(n), np.zeros((n, m)), U, periodic_with=per))
         x_scale = np.sqrt(np.mean(np.concatenate(states) ** 2, axis=0))
         x_scale[x_scale == 0] = 1.0
         T, Ti = np.diag(x_scale), np.diag(1 / x_scale)

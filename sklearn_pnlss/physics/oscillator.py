@@ -10,7 +10,7 @@ from sklearn.utils import check_random_state
 
 from ._newmark import STATE_Z, newmark_run
 from .forces import pack_forces
-from .resampling import _check_signal, decimate_fir, upsample_fft
+from .resampling import _check_signal, check_factors, decimate_fir, upsample_fft
 
 __all__ = ["Oscillator", "FineSimulation", "band_limited_noise"]
 
@@ -61,18 +61,7 @@ def _positive_real(name, value, *, allow_zero=False):
 
 
 def _check_decimation(decimation, oversampling):
-    if isinstance(decimation, Integral) and not isinstance(decimation, bool):
-        decimation = (decimation,)
-    try:
-        decimation = tuple(decimation)
-    except TypeError:
-        raise ValueError(f"decimation must be a sequence of ints, got {decimation!r}.")
-    if not decimation or any(
-        isinstance(r, bool) or not isinstance(r, Integral) or r < 1 for r in decimation
-    ):
-        raise ValueError(
-            f"decimation must be a non-empty sequence of positive ints, got {decimation!r}."
-        )
+    decimation = check_factors(decimation, "decimation")
     if int(np.prod(decimation)) != oversampling:
         raise ValueError(
             f"the product of decimation {decimation} is {int(np.prod(decimation))}, "

@@ -25,6 +25,20 @@ def _check_factor(name, r):
     return int(r)
 
 
+def check_factors(factors, name="factors"):
+    """Decimation factors as a non-empty tuple of positive ints (one int is
+    one stage)."""
+    if isinstance(factors, Integral) and not isinstance(factors, bool):
+        factors = (factors,)
+    try:
+        factors = tuple(factors)
+    except TypeError:
+        raise ValueError(f"{name} must be an int or a sequence of ints, got {factors!r}.") from None
+    if not factors:
+        raise ValueError(f"{name} must contain at least one decimation factor.")
+    return tuple(_check_factor(f"each factor of {name}", r) for r in factors)
+
+
 def _check_signal(x, name="x"):
     x = np.asarray(x, dtype=np.float64)
     if x.ndim != 1:
@@ -121,16 +135,7 @@ def decimate_fir(x, factors, *, periodic=False):
     (200,)
     """
     x = _check_signal(x)
-    if isinstance(factors, Integral) and not isinstance(factors, bool):
-        factors = (factors,)
-    try:
-        factors = tuple(factors)
-    except TypeError:
-        raise ValueError(f"factors must be an int or a sequence of ints, got {factors!r}.")
-    if not factors:
-        raise ValueError("factors must contain at least one decimation factor.")
-    for r in factors:
-        r = _check_factor("each decimation factor", r)
+    for r in check_factors(factors):
         if r == 1:
             continue
         x = _decimate_once(x, r, periodic)

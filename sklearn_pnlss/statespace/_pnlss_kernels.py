@@ -73,6 +73,18 @@ def _nonlinear_terms(x, u, exE, exF, ws):
     _monomials(s, exF, eta, deta, pw)
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _linearised(L, W, dterms, n, out):
+    """out = L + W dterms[:, :n]: the local linear map of x (A + E dzeta/dx,
+    or C + F deta/dx)."""
+    for i in range(L.shape[0]):
+        for k in range(n):
+            acc = L[i, k]
+            for j in range(W.shape[1]):
+                acc += W[i, j] * dterms[j, k]
+            out[i, k] = acc
+
+
 @numba.njit(cache=True, nogil=True)
 def pnlss_simulate(A, B, C, D, E, F, exE, exF, U, x0):
     """Simulate; returns (Y, X, n_ok, x_end). n_ok < len(U) means the state
@@ -120,20 +132,10 @@ def pnlss_jacobian(A, B, C, D, E, F, exE, exF, U, x0, n_skip, J):
     x = x0.copy()
     for t in range(N):
         _nonlinear_terms(x, U[t], exE, exF, ws)
-        for i in range(n):
-            for k in range(n):
-                acc = A[i, k]
-                for j in range(nE):
-                    acc += E[i, j] * dzeta[j, k]
-                Ax[i, k] = acc
+        _linearised(A, E, dzeta, n, Ax)
         if t >= n_skip:
             r = t - n_skip
-            for a in range(p):
-                for k in range(n):
-                    acc = C[a, k]
-                    for j in range(nF):
-                        acc += F[a, j] * deta[j, k]
-                    Cx[a, k] = acc
+            _linearised(C, F, deta, n, Cx)
             for a in range(p):
                 for q in range(n_sx):
                     acc = 0.0

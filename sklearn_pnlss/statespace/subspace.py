@@ -11,7 +11,7 @@ import numpy as np
 from scipy.linalg import qr, sqrtm, svd
 from scipy.optimize import least_squares
 
-from .linear import frequency_response, is_stable, stabilize
+from .linear import is_stable, stabilize
 
 __all__ = ["fd_subspace", "fd_refine", "frf_weights"]
 
@@ -77,7 +77,7 @@ def fd_subspace(G, z, n_states, *, var=None, q=None, estimate_d=True):
         Variance of ``G``; lines are weighted by ``1/sigma``.
     q : int, default=None
         Block rows of the extended observability matrix (> n_states);
-        default ``n_states + 1``... chosen as ``max(n_states + 1, 2 n_states)``.
+        ``max(n_states + 1, 2 n_states)`` when None.
     estimate_d : bool, default=True
         Estimate the direct feedthrough D (else D = 0).
 
