@@ -7,6 +7,9 @@ first group moves the state, the second only the output. The Jacobian of the
 simulated output comes from the sensitivity recursion
 dx/dtheta(t+1) = (A + E dzeta/dx) dx/dtheta(t) + direct term,
 one pass over time for all parameters at once.
+
+The loops are written out (no ``@`` on small arrays): numba's matrix
+products allocate at every sample, which cost more than the arithmetic.
 """
 import numba
 import numpy as np
@@ -15,70 +18,84 @@ import numpy as np
 # the simulation diverged: stop and report instead of overflowing.
 DIVERGENCE_BOUND = 1e6
 
+_jit = numba.njit(cache=True, nogil=True, inline="always")
 
-@numba.njit(cache=True, nogil=True, inline="always")
-def _monomials(s, exps, out, dout, pw):
-    """Monomials and their derivatives with respect to each variable."""
-    n_terms, n_vars = exps.shape
-    max_deg = pw.shape[1] - 1
-    for v in range(n_vars):
+
+@_jit
+def _powers(s, pw):
+    """pw[v, e] = s[v] ** e for e up to the largest degree."""
+    for v in range(s.shape[0]):
         pw[v, 0] = 1.0
-        for e in range(1, max_deg + 1):
+        for e in range(1, pw.shape[1]):
             pw[v, e] = pw[v, e - 1] * s[v]
-    for j in range(n_terms):
+
+
+@_jit
+def _monomial_values(exps, pw, out):
+    for j in range(exps.shape[0]):
         val = 1.0
-        for v in range(n_vars):
+        for v in range(exps.shape[1]):
             val *= pw[v, exps[j, v]]
         out[j] = val
-        for v in range(n_vars):
-            e = exps[j, v]
+
+
+@_jit
+def _state_derivatives(exps, pw, n, dout):
+    """dout[j, k] = d monomial_j / d x_k for the n states (the inputs are
+    given, so their derivatives are never needed)."""
+    n_vars = exps.shape[1]
+    for j in range(exps.shape[0]):
+        for k in range(n):
+            e = exps[j, k]
             if e == 0:
-                dout[j, v] = 0.0
-            else:
-                d = e * pw[v, e - 1]
-                for w in range(n_vars):
-                    if w != v:
-                        d *= pw[w, exps[j, w]]
-                dout[j, v] = d
+                dout[j, k] = 0.0
+                continue
+            d = e * pw[k, e - 1]
+            for w in range(n_vars):
+                if w != k:
+                    d *= pw[w, exps[j, w]]
+            dout[j, k] = d
 
 
 @numba.njit(cache=True, nogil=True)
-def _workspace(exE, exF, nv):
-    """Scratch arrays (powers, zeta, dzeta, eta, deta, s) for one pass."""
-    max_deg = 1
+def _max_degree(exE, exF):
+    deg = 1
     for j in range(exE.shape[0]):
-        max_deg = max(max_deg, exE[j].sum())
+        deg = max(deg, exE[j].sum())
     for j in range(exF.shape[0]):
-        max_deg = max(max_deg, exF[j].sum())
-    return (
-        np.empty((nv, max_deg + 1)),
-        np.empty(exE.shape[0]),
-        np.empty((exE.shape[0], nv)),
-        np.empty(exF.shape[0]),
-        np.empty((exF.shape[0], nv)),
-        np.empty(nv),
-    )
+        deg = max(deg, exF[j].sum())
+    return deg
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
-def _nonlinear_terms(x, u, exE, exF, ws):
-    """zeta, eta and their derivatives at s = [x; u], into the workspace."""
-    pw, zeta, dzeta, eta, deta, s = ws
+@_jit
+def _stack(x, u, s):
     n = x.shape[0]
     for i in range(n):
         s[i] = x[i]
     for i in range(u.shape[0]):
         s[n + i] = u[i]
-    _monomials(s, exE, zeta, dzeta, pw)
-    _monomials(s, exF, eta, deta, pw)
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
-def _linearised(L, W, dterms, n, out):
-    """out = L + W dterms[:, :n]: the local linear map of x (A + E dzeta/dx,
-    or C + F deta/dx)."""
+@_jit
+def _affine(M, v, N, w, P, z, out):
+    """out = M v + N w + P z (the state or output update)."""
+    for i in range(out.shape[0]):
+        acc = 0.0
+        for k in range(v.shape[0]):
+            acc += M[i, k] * v[k]
+        for k in range(w.shape[0]):
+            acc += N[i, k] * w[k]
+        for k in range(z.shape[0]):
+            acc += P[i, k] * z[k]
+        out[i] = acc
+
+
+@_jit
+def _linearised(L, W, dterms, out):
+    """out = L + W dterms: the local linear map of x (A + E dzeta/dx, or
+    C + F deta/dx)."""
     for i in range(L.shape[0]):
-        for k in range(n):
+        for k in range(L.shape[1]):
             acc = L[i, k]
             for j in range(W.shape[1]):
                 acc += W[i, j] * dterms[j, k]
@@ -92,16 +109,23 @@ def pnlss_simulate(A, B, C, D, E, F, exE, exF, U, x0):
     N, m = U.shape
     n = A.shape[0]
     p = C.shape[0]
-    ws = _workspace(exE, exF, n + m)
-    zeta, eta = ws[1], ws[3]
-    Y = np.zeros((N, p))
-    X = np.zeros((N, n))
+    pw = np.empty((n + m, _max_degree(exE, exF) + 1))
+    s = np.empty(n + m)
+    zeta = np.empty(exE.shape[0])
+    eta = np.empty(exF.shape[0])
+    Y = np.empty((N, p))
+    X = np.empty((N, n))
     x = x0.copy()
+    x_next = np.empty(n)
     for t in range(N):
-        _nonlinear_terms(x, U[t], exE, exF, ws)
+        _stack(x, U[t], s)
+        _powers(s, pw)
+        _monomial_values(exE, pw, zeta)
+        _monomial_values(exF, pw, eta)
         X[t] = x
-        Y[t] = C @ x + D @ U[t] + F @ eta
-        x = A @ x + B @ U[t] + E @ zeta
+        _affine(C, x, D, U[t], F, eta, Y[t])
+        _affine(A, x, B, U[t], E, zeta, x_next)
+        x, x_next = x_next, x
         for i in range(n):
             if not np.abs(x[i]) < DIVERGENCE_BOUND:  # also catches NaN
                 return Y, X, t + 1, x
@@ -117,49 +141,65 @@ def pnlss_jacobian(A, B, C, D, E, F, exE, exF, U, x0, n_skip, J):
     p = C.shape[0]
     nE = exE.shape[0]
     nF = exF.shape[0]
-    nv = n + m
     n_sx = n * n + n * m + n * nE  # parameters that move the state
     oA, oB, oE = 0, n * n, n * n + n * m
     oC = n_sx
     oD = oC + p * n
     oF = oD + p * m
-    ws = _workspace(exE, exF, nv)
-    zeta, dzeta, eta, deta = ws[1], ws[2], ws[3], ws[4]
-    Sx = np.zeros((n, n_sx))
-    Sx_new = np.empty((n, n_sx))
+    pw = np.empty((n + m, _max_degree(exE, exF) + 1))
+    s = np.empty(n + m)
+    zeta = np.empty(nE)
+    dzeta = np.empty((nE, n))
+    eta = np.empty(nF)
+    deta = np.empty((nF, n))
+    Sx = np.zeros((n, n_sx))  # dx/dtheta for the state-moving parameters
+    Sx_next = np.empty((n, n_sx))
     Ax = np.empty((n, n))  # A + E dzeta/dx
     Cx = np.empty((p, n))  # C + F deta/dx
     x = x0.copy()
+    x_next = np.empty(n)
     for t in range(N):
-        _nonlinear_terms(x, U[t], exE, exF, ws)
-        _linearised(A, E, dzeta, n, Ax)
+        u = U[t]
+        _stack(x, u, s)
+        _powers(s, pw)
+        _monomial_values(exE, pw, zeta)
+        _state_derivatives(exE, pw, n, dzeta)
+        _linearised(A, E, dzeta, Ax)
         if t >= n_skip:
-            r = t - n_skip
-            _linearised(C, F, deta, n, Cx)
+            _monomial_values(exF, pw, eta)
+            _state_derivatives(exF, pw, n, deta)
+            _linearised(C, F, deta, Cx)
+            Jt = J[t - n_skip]
             for a in range(p):
                 for q in range(n_sx):
-                    acc = 0.0
-                    for k in range(n):
-                        acc += Cx[a, k] * Sx[k, q]
-                    J[r, a, q] = acc
+                    Jt[a, q] = 0.0
                 for k in range(n):
-                    J[r, a, oC + a * n + k] = x[k]
+                    c = Cx[a, k]
+                    for q in range(n_sx):
+                        Jt[a, q] += c * Sx[k, q]
+                for q in range(n_sx, Jt.shape[1]):
+                    Jt[a, q] = 0.0
+                for k in range(n):
+                    Jt[a, oC + a * n + k] = x[k]
                 for k in range(m):
-                    J[r, a, oD + a * m + k] = U[t, k]
+                    Jt[a, oD + a * m + k] = u[k]
                 for k in range(nF):
-                    J[r, a, oF + a * nF + k] = eta[k]
-        # Sensitivity of the next state.
+                    Jt[a, oF + a * nF + k] = eta[k]
+        # Sensitivity of the next state: the propagated part, then the
+        # direct dependence of row i on its own parameters.
         for i in range(n):
             for q in range(n_sx):
-                acc = 0.0
-                for k in range(n):
-                    acc += Ax[i, k] * Sx[k, q]
-                Sx_new[i, q] = acc
+                Sx_next[i, q] = 0.0
             for k in range(n):
-                Sx_new[i, oA + i * n + k] += x[k]
+                c = Ax[i, k]
+                for q in range(n_sx):
+                    Sx_next[i, q] += c * Sx[k, q]
+            for k in range(n):
+                Sx_next[i, oA + i * n + k] += x[k]
             for k in range(m):
-                Sx_new[i, oB + i * m + k] += U[t, k]
+                Sx_next[i, oB + i * m + k] += u[k]
             for k in range(nE):
-                Sx_new[i, oE + i * nE + k] += zeta[k]
-        Sx[:, :] = Sx_new
-        x = A @ x + B @ U[t] + E @ zeta
+                Sx_next[i, oE + i * nE + k] += zeta[k]
+        Sx, Sx_next = Sx_next, Sx
+        _affine(A, x, B, u, E, zeta, x_next)
+        x, x_next = x_next, x

@@ -17,11 +17,20 @@ class DivergenceError(ValueError):
 @dataclass
 class Segment:
     """One training signal ready for simulation: ``U`` is simulated from rest
-    and the first ``n_skip`` samples (a transient) are left out of the cost."""
+    and the first ``n_skip`` samples (a transient) are left out of the cost.
+
+    Optional weighting of the squared error (see
+    :mod:`sklearn_pnlss.statespace.objective`): ``time_weight`` of the shape
+    of ``Y``, or ``freq_weight`` of shape (period // 2 + 1, p) per DFT bin of
+    each ``period``-sample block of ``Y``.
+    """
 
     U: np.ndarray
     Y: np.ndarray  # target for U[n_skip:]
     n_skip: int
+    time_weight: np.ndarray | None = None
+    freq_weight: np.ndarray | None = None
+    period: int | None = None
 
 
 @dataclass
@@ -94,28 +103,35 @@ class PNLSSModel:
         x0 = None if period is None else self.steady_state_start(U[:period])
         return self.simulate(U, x0)[0]
 
+    def segment_error(self, seg):
+        """Simulation error (T, p) on one segment, or None when it diverges."""
+        Y, _, n_ok, _ = self._run(seg.U, np.zeros(self.A.shape[0]))
+        if n_ok < seg.U.shape[0]:
+            return None
+        return Y[seg.n_skip :] - seg.Y
+
+    def segment_jacobian(self, seg):
+        """Exact Jacobian (T, p, n_params) of :meth:`segment_error` by the
+        sensitivity recursion."""
+        J = np.empty((seg.U.shape[0] - seg.n_skip, self.C.shape[0], self.n_params))
+        pnlss_jacobian(
+            self.A, self.B, self.C, self.D, self.E, self.F, self.exE, self.exF,
+            np.ascontiguousarray(seg.U), np.zeros(self.A.shape[0]), seg.n_skip, J,
+        )
+        return J
+
     def residual(self, segments):
-        """Stacked simulation errors, or None when any segment diverges."""
+        """Stacked unweighted simulation errors, or None when any segment
+        diverges."""
         out = []
         for seg in segments:
-            Y, _, n_ok, _ = self._run(seg.U, np.zeros(self.A.shape[0]))
-            if n_ok < seg.U.shape[0]:
+            err = self.segment_error(seg)
+            if err is None:
                 return None
-            out.append((Y[seg.n_skip :] - seg.Y).ravel())
+            out.append(err.ravel())
         return np.concatenate(out)
 
     def jacobian(self, segments):
-        """Exact Jacobian of :meth:`residual` by the sensitivity recursion."""
-        p = self.C.shape[0]
-        rows = sum(seg.U.shape[0] - seg.n_skip for seg in segments)
-        J = np.empty((rows, p, self.n_params))
-        r = 0
-        for seg in segments:
-            n_rows = seg.U.shape[0] - seg.n_skip
-            pnlss_jacobian(
-                self.A, self.B, self.C, self.D, self.E, self.F, self.exE, self.exF,
-                np.ascontiguousarray(seg.U), np.zeros(self.A.shape[0]), seg.n_skip,
-                J[r : r + n_rows],
-            )
-            r += n_rows
-        return J.reshape(rows * p, self.n_params)
+        """Exact Jacobian of :meth:`residual`."""
+        J = [self.segment_jacobian(seg) for seg in segments]
+        return np.concatenate(J).reshape(-1, self.n_params)

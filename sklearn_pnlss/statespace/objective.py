@@ -1,0 +1,73 @@
+"""The weighted simulation-error cost that Levenberg-Marquardt minimises.
+
+The cost is the sum over training segments of the squared simulation error,
+optionally weighted
+
+- in time: each sample and output by ``Segment.time_weight``;
+- in frequency: each DFT bin of each period by ``Segment.freq_weight``
+  (zero outside the band of interest). The error of each period is taken to
+  the frequency domain with a unitary DFT, interior bins counted twice, so
+  that unit weights at all bins give back the time-domain cost (Parseval).
+
+The Jacobian is used through the normal equations J^T J and J^T e,
+accumulated segment by segment: only one segment's Jacobian is ever in
+memory, whatever the number of signals.
+"""
+import numpy as np
+
+__all__ = ["SimulationError", "weigh"]
+
+
+def weigh(seg, R):
+    """Weighted residual rows from R of shape (T, p, k) (k = 1 for the error,
+    n_params for its Jacobian); returns (n_rows, k), real."""
+    T, p, k = R.shape
+    if seg.time_weight is not None:
+        return (np.sqrt(seg.time_weight)[:, :, None] * R).reshape(-1, k)
+    if seg.freq_weight is None:
+        return R.reshape(-1, k)
+    N = seg.period
+    bins = np.flatnonzero(np.any(seg.freq_weight > 0, axis=1))
+    # Real and imaginary parts of the unitary DFT; the interior bins stand for
+    # their negative-frequency twins too, hence the factor 2 in the weight.
+    twice = np.where((bins == 0) | (2 * bins == N), 1.0, 2.0)
+    w = np.sqrt(seg.freq_weight[bins] * twice[:, None] / N)[None, :, :, None]
+    F = np.fft.rfft(R.reshape(T // N, N, p, k), axis=1)[:, bins] * w
+    return np.concatenate([F.real, F.imag], axis=1).reshape(-1, k)
+
+
+class SimulationError:
+    """Weighted simulation error of a model over training segments.
+
+    Parameters
+    ----------
+    segments : list of Segment
+    """
+
+    def __init__(self, segments):
+        self.segments = segments
+
+    def residual(self, model):
+        """Weighted residual vector, or None when the model diverges."""
+        out = []
+        for seg in self.segments:
+            err = model.segment_error(seg)
+            if err is None or not np.all(np.isfinite(err)):
+                return None
+            out.append(weigh(seg, err[:, :, None]).ravel())
+        return np.concatenate(out)
+
+    def normal_equations(self, model):
+        """J^T J and J^T e of the weighted residual at ``model``, or None when
+        the model diverges."""
+        G = np.zeros((model.n_params, model.n_params))
+        g = np.zeros(model.n_params)
+        for seg in self.segments:
+            err = model.segment_error(seg)
+            if err is None:
+                return None
+            e = weigh(seg, err[:, :, None])[:, 0]
+            J = weigh(seg, model.segment_jacobian(seg))
+            G += J.T @ J
+            g += J.T @ e
+        return G, g
