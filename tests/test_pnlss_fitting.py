@@ -1,0 +1,162 @@
+"""The PNLSS fit's machinery: the LM step from the normal equations, period
+averaging, time and frequency weighting, validation-based iterate selection,
+multiple inputs and outputs."""
+import numpy as np
+import pytest
+
+from sklearn_pnlss import PNLSSRegressor
+from sklearn_pnlss.signals import multisine
+from sklearn_pnlss.statespace.levenberg_marquardt import lm_step_basis
+from sklearn_pnlss.statespace.monomials import monomial_exponents
+from sklearn_pnlss.statespace.objective import SimulationError, weigh
+from sklearn_pnlss.statespace.pnlss import PNLSSModel, Segment
+
+N = 256
+
+
+def _truth(rng, m=1, p=1, n=3, scale_E=0.02):
+    """A stable PNLSS system: small random quadratic and cubic terms plus a
+    hardening cubic on each state (random cubics alone tend to escape)."""
+    exE = monomial_exponents(n + m, (2, 3))
+    E = scale_E * rng.standard_normal((n, len(exE)))
+    for i in range(n):
+        E[i, np.flatnonzero(exE[:, i] == 3)] = -0.1
+    return PNLSSModel(
+        A=np.diag([0.85, 0.6, 0.3])[:n, :n] + 0.02 * rng.standard_normal((n, n)),
+        B=0.3 * rng.standard_normal((n, m)), C=rng.standard_normal((p, n)), D=0.1 * rng.standard_normal((p, m)),
+        E=E, F=np.zeros((p, 0)),
+        exE=exE, exF=np.zeros((0, n + m), dtype=np.int64),
+    )
+
+
+def _data(truth, m=1, n_periods=2, n_realizations=2, seed=2, noise=0.0, rms=0.5):
+    rng = np.random.default_rng(seed)
+    X, _ = multisine(N, fs=1.0, f_band=(0.01, 0.45), rms=rms, n_periods=n_periods,
+                     n_realizations=n_realizations, n_inputs=m, random_state=seed)
+    y = np.stack([truth.simulate_signal(x, period=N) for x in X])
+    return X, y + noise * y.std() * rng.standard_normal(y.shape)
+
+
+def test_step_basis_equals_the_svd_of_the_scaled_jacobian():
+    rng = np.random.default_rng(0)
+    J = rng.standard_normal((500, 8)) * np.logspace(0, 4, 8)
+    J[:, 7] = J[:, 0] + J[:, 1]  # one exact null direction, to be dropped
+    scale, S, V = lm_step_basis(J.T @ J, n_drop=1)
+    _, S_svd, Vt = np.linalg.svd(J / scale, full_matrices=False)
+    np.testing.assert_allclose(S, S_svd[:7], rtol=1e-9)
+    np.testing.assert_allclose(np.abs(V.T @ Vt[:7].T), np.eye(7), atol=1e-8)
+
+
+def test_frequency_weighting_with_unit_weights_is_parseval_and_jacobian_is_consistent():
+    rng = np.random.default_rng(1)
+    model = _truth(rng)
+    U = 0.3 * rng.standard_normal((3 * N + 20, 1))
+    Y = rng.standard_normal((3 * N, 1))
+    plain = SimulationError([Segment(U, Y, 20)])
+    freq = SimulationError([Segment(U, Y, 20, freq_weight=np.ones((N // 2 + 1, 1)), period=N)])
+    e_t, e_f = plain.residual(model), freq.residual(model)
+    assert np.isclose(e_t @ e_t, e_f @ e_f, rtol=1e-12)
+    # A band weight: the gradient J^T e matches finite differences of the cost.
+    w = np.zeros((N // 2 + 1, 1))
+    w[10:40] = rng.uniform(0.5, 2.0, (30, 1))
+    band = SimulationError([Segment(U, Y, 20, freq_weight=w, period=N)])
+    _, g = band.normal_equations(model)
+    theta = model.theta
+    for q in rng.choice(theta.size, 6, replace=False):
+        d = np.zeros_like(theta)
+        d[q] = 1e-6
+        cost = [np.sum(band.residual(model.with_theta(theta + s * d)) ** 2) for s in (1, -1)]
+        assert np.isclose((cost[0] - cost[1]) / 4e-6, g[q], rtol=1e-5, atol=1e-8 * np.abs(g).max())
+
+
+def test_time_weights_scale_the_squared_error():
+    R = np.arange(12.0).reshape(6, 2, 1)
+    w = np.linspace(0, 1, 12).reshape(6, 2)
+    out = weigh(Segment(None, None, 0, time_weight=w), R)
+    np.testing.assert_allclose(out[:, 0] ** 2, (w * R[:, :, 0] ** 2).ravel())
+
+
+def test_period_averaging_keeps_the_optimum():
+    truth = _truth(np.random.default_rng(3))
+    X, y = _data(truth, n_periods=3, noise=0.01)
+    fits = [PNLSSRegressor(3, period=N, max_iter=15, average_periods=a).fit(X, y) for a in (True, False)]
+    yp = [f.predict(X) for f in fits]
+    assert np.sqrt(np.mean((yp[0] - yp[1]) ** 2)) < 1e-3 * y.std()
+    # The cost of the averaged fit is lower by about the number of periods
+    # (the noise power of the average).
+    ratio = fits[1].cost_history_[0] / fits[0].cost_history_[0]
+    assert 2.0 < ratio < 3.5
+
+
+def test_noise_weighting_beats_unweighted_under_coloured_noise():
+    """Strong noise in part of the band: weighting by its inverse variance
+    gets closer to the true system than treating all bins alike."""
+    rng = np.random.default_rng(4)
+    truth = _truth(rng)
+    X, y_clean = _data(truth, n_periods=4, n_realizations=2)
+    noise = rng.standard_normal(y_clean.shape)
+    spec = np.fft.rfft(noise, axis=1)
+    k = np.fft.rfftfreq(noise.shape[1])
+    spec *= np.where((k > 0.2) & (k < 0.3), 30.0, 0.3)[None, :, None]
+    y = y_clean + 0.01 * y_clean.std() * np.fft.irfft(spec, n=noise.shape[1], axis=1)
+    X_val, y_val = _data(truth, n_periods=1, n_realizations=1, seed=9)
+    errs = {}
+    for weighting in (None, "noise"):
+        model = PNLSSRegressor(3, period=N, weighting=weighting, max_iter=30).fit(X, y)
+        errs[weighting] = -model.score(X_val, y_val)
+    assert errs["noise"] < errs[None] - 6  # at least 6 dB closer to the truth
+
+
+def test_validation_keeps_the_best_iterate():
+    truth = _truth(np.random.default_rng(5))
+    X, y = _data(truth, noise=0.05)
+    X_val, y_val = _data(truth, n_periods=1, n_realizations=1, seed=7)
+    model = PNLSSRegressor(3, period=N, max_iter=20).fit(X, y, X_val=X_val, y_val=y_val)
+    hist = model.validation_history_
+    assert hist.shape == (model.n_iter_ + 1,)
+    assert model.best_iteration_ == int(np.argmin(hist))
+    assert np.isclose(-model.score(X_val, y_val), hist.min(), atol=1e-6)
+
+
+def test_time_weight_and_frequency_weighting_are_exclusive():
+    truth = _truth(np.random.default_rng(6))
+    X, y = _data(truth)
+    with pytest.raises(ValueError, match="time_weight"):
+        PNLSSRegressor(3, period=N, weighting="band", max_iter=1).fit(X, y, time_weight=np.ones(y.shape))
+    with pytest.raises(ValueError, match="layout of y"):
+        PNLSSRegressor(3, period=N, max_iter=1).fit(X, y, time_weight=np.ones(y.shape[:2]))
+    with pytest.raises(ValueError, match="X_val and y_val"):
+        PNLSSRegressor(3, period=N, max_iter=1).fit(X, y, X_val=X)
+    with pytest.raises(ValueError, match="band must be"):
+        PNLSSRegressor(3, period=N, weighting="band", band=(5, N), max_iter=1).fit(X, y)
+    with pytest.raises(ValueError, match="set period"):
+        PNLSSRegressor(3, weighting="noise", max_iter=1).fit(X, y)
+
+
+def test_zero_time_weight_ignores_corrupted_samples():
+    truth = _truth(np.random.default_rng(8))
+    X, y = _data(truth)
+    y_bad = y.copy()
+    y_bad[0, 100:140] += 5 * y.std()  # a burst of corrupted samples
+    w = np.ones(y.shape)
+    w[0, 100:140] = 0.0
+    X_val, y_val = _data(truth, n_periods=1, n_realizations=1, seed=7)
+    kw = dict(period=N, max_iter=30, average_periods=False)
+    err_w = -PNLSSRegressor(3, **kw).fit(X, y_bad, time_weight=w).score(X_val, y_val)
+    err_u = -PNLSSRegressor(3, **kw).fit(X, y_bad).score(X_val, y_val)
+    assert err_w < err_u - 10
+
+
+def test_two_inputs_two_outputs():
+    """MIMO: a 2-input, 2-output PNLSS system is recovered far below the
+    output level from noiseless data."""
+    rng = np.random.default_rng(10)
+    truth = _truth(rng, m=2, p=2)
+    X, y = _data(truth, m=2, n_periods=2, n_realizations=4, rms=0.2)
+    model = PNLSSRegressor(3, period=N, max_iter=60).fit(X, y)
+    assert model.n_outputs_ == 2 and model.B_.shape == (3, 2) and model.C_.shape == (2, 3)
+    X_val, y_val = _data(truth, m=2, n_periods=1, n_realizations=2, seed=11, rms=0.2)
+    # The linear model is 26 dB below the output, the PNLSS model 60 dB.
+    assert -model.linear_model_.score(X_val, y_val) > 20 * np.log10(y_val.std()) - 30
+    assert -model.score(X_val, y_val) < 20 * np.log10(y_val.std()) - 60
+    assert model.n_nonlinear_params_ == 3 * len(monomial_exponents(5, (2, 3)))
