@@ -1,0 +1,217 @@
+"""Univariate branches ``g_l`` of a decoupled polynomial map.
+
+After the CPD ``J ~ [[W, V, H]]`` of the Jacobian tensor, ``H[k, l]``
+samples the derivative ``g_l'(z)`` at ``z = v_l^T s_k``. A polynomial fit of
+``g_l'`` and its integration give the branches of
+``f(s) ~ W g(V^T s)``.
+
+A branch of degree ``d`` is ``g_l(z) = sum_{p=2..d} coef[l, p-2] z**p``: it
+has no constant term (a constant shift of the state equation is not part of
+the model) and no linear term (the linear part of the model lives in
+``A, B, C, D``), so ``d - 1`` coefficients per branch.
+"""
+import numbers
+
+import numpy as np
+from sklearn.utils.validation import check_array
+
+__all__ = [
+    "branch_derivatives",
+    "decoupled_map",
+    "evaluate_branches",
+    "fit_branches",
+]
+
+
+def _check_coef(coef):
+    coef = check_array(coef, dtype=np.float64, input_name="coef")
+    return coef
+
+
+def _check_Z(coef, Z):
+    Z = check_array(Z, dtype=np.float64, input_name="Z")
+    if Z.shape[1] != coef.shape[0]:
+        raise ValueError(
+            f"Z has {Z.shape[1]} column(s) but coef has {coef.shape[0]} "
+            "row(s): one column of Z per branch is needed."
+        )
+    return Z
+
+
+def fit_branches(V, H, points, degree):
+    """Polynomial branches from the CPD factors ``V`` and ``H``.
+
+    For branch ``l``, ``z_l = points @ V[:, l]`` and ``H[:, l]`` samples
+    ``g_l'(z_l)``. ``g_l'`` is fitted by least squares as a polynomial in
+    ``z`` of degrees 1..``degree - 1`` and integrated to ``g_l`` of degrees
+    2..``degree``.
+
+    Parameters
+    ----------
+    V : array-like of shape (n_vars, r)
+        Variable factor of the CPD (one direction ``v_l`` per column).
+    H : array-like of shape (N, r)
+        Point factor of the CPD, ``H[k, l] ~ g_l'(points[k] @ V[:, l])``.
+    points : array-like of shape (N, n_vars)
+        The points at which the Jacobian tensor was sampled.
+    degree : int
+        Degree ``d >= 2`` of the branches ``g_l``.
+
+    Returns
+    -------
+    coef : ndarray of shape (r, degree - 1)
+        ``coef[l, k]`` multiplies ``z ** (k + 2)`` in ``g_l``.
+
+    Notes
+    -----
+    A constant in ``g_l'`` (a linear term of ``f``) is fitted, so that it
+    does not leak into the other coefficients, and then dropped: it is a
+    linear term of ``g_l``, which belongs to ``A, B`` (``C, D``), not to the
+    nonlinear branches.
+
+    The fit is in ``t = z / rms(z)``, so the columns ``t**p`` of the
+    regression matrix are of order one whatever the units of ``z``; the
+    coefficients are then mapped back to ``z`` (``c_p = a_p / rms(z)**p``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> z = np.linspace(-1.0, 1.0, 11)
+    >>> H = (2 * z + 3 * z**2)[:, None]  # g'(z) of g(z) = z**2 + z**3
+    >>> fit_branches([[1.0]], H, z[:, None], degree=3).round(12).tolist()
+    [[1.0, 1.0]]
+    """
+    V = check_array(V, dtype=np.float64, input_name="V")
+    H = check_array(H, dtype=np.float64, input_name="H")
+    points = check_array(points, dtype=np.float64, input_name="points")
+    if (
+        not isinstance(degree, numbers.Integral)
+        or isinstance(degree, bool)
+        or degree < 2
+    ):
+        raise ValueError(
+            f"degree must be an integer >= 2 (branches have degrees 2..degree); "
+            f"got {degree!r}."
+        )
+    if points.shape[1] != V.shape[0]:
+        raise ValueError(
+            f"points has {points.shape[1]} column(s) but V has {V.shape[0]} "
+            "row(s): one column per variable is needed."
+        )
+    if H.shape != (points.shape[0], V.shape[1]):
+        raise ValueError(
+            f"H must have shape (N, r) = ({points.shape[0]}, {V.shape[1]}) "
+            f"(one row per point, one column per branch); got {H.shape}."
+        )
+    degree = int(degree)
+    Z = points @ V
+    coef = np.empty((V.shape[1], degree - 1))
+    # Derivative degrees 0..d-1; degree 0 is only there to absorb a constant.
+    powers = np.arange(degree)
+    for branch in range(V.shape[1]):
+        z = Z[:, branch]
+        rms = np.sqrt(np.mean(z**2))
+        # rms = 0: every point is orthogonal to v_l, g_l' is only seen at 0
+        # and its higher coefficients are undetermined; lstsq then returns
+        # the minimum-norm answer (zeros) instead of dividing by zero.
+        scale = rms if rms > 0 else 1.0
+        design = (z / scale)[:, None] ** powers
+        a = np.linalg.lstsq(design, H[:, branch], rcond=None)[0]
+        deriv = a[1:] / scale ** powers[1:]  # g_l' coefficients of z**1..z**(d-1)
+        coef[branch] = deriv / (powers[1:] + 1)  # integrate: z**p -> z**(p+1)/(p+1)
+    return coef
+
+
+def evaluate_branches(coef, Z):
+    """Values of the branches, ``G[k, l] = g_l(Z[k, l])``.
+
+    Parameters
+    ----------
+    coef : array-like of shape (r, degree - 1)
+        Branch coefficients, ``coef[l, k]`` multiplies ``z ** (k + 2)``.
+    Z : array-like of shape (N, r)
+        Branch arguments, ``Z = points @ V``.
+
+    Returns
+    -------
+    G : ndarray of shape (N, r)
+
+    Examples
+    --------
+    >>> evaluate_branches([[1.0, 1.0]], [[2.0]]).tolist()  # z**2 + z**3 at 2
+    [[12.0]]
+    """
+    coef = _check_coef(coef)
+    Z = _check_Z(coef, Z)
+    powers = np.arange(2, coef.shape[1] + 2)
+    return np.einsum("klp,lp->kl", Z[:, :, None] ** powers, coef)
+
+
+def branch_derivatives(coef, Z):
+    """Derivatives of the branches, ``G'[k, l] = g_l'(Z[k, l])``.
+
+    Parameters
+    ----------
+    coef : array-like of shape (r, degree - 1)
+        Branch coefficients, ``coef[l, k]`` multiplies ``z ** (k + 2)``.
+    Z : array-like of shape (N, r)
+        Branch arguments, ``Z = points @ V``.
+
+    Returns
+    -------
+    dG : ndarray of shape (N, r)
+
+    Examples
+    --------
+    >>> branch_derivatives([[1.0, 1.0]], [[2.0]]).tolist()  # 2z + 3z**2 at 2
+    [[16.0]]
+    """
+    coef = _check_coef(coef)
+    Z = _check_Z(coef, Z)
+    powers = np.arange(2, coef.shape[1] + 2)
+    return np.einsum("klp,lp->kl", Z[:, :, None] ** (powers - 1), coef * powers)
+
+
+def decoupled_map(W, V, coef, points):
+    """The decoupled map ``f(s) = W g(V^T s)`` at many points.
+
+    Used to check a decoupled approximation against the original
+    polynomial ``E zeta(s)``.
+
+    Parameters
+    ----------
+    W : array-like of shape (n_out, r)
+        Output factor (how the branches combine into the outputs).
+    V : array-like of shape (n_vars, r)
+        Variable factor (one direction per branch).
+    coef : array-like of shape (r, degree - 1)
+        Branch coefficients from :func:`fit_branches`.
+    points : array-like of shape (N, n_vars)
+        Where to evaluate, one point per row.
+
+    Returns
+    -------
+    values : ndarray of shape (N, n_out)
+        ``values[k] = W @ g(V.T @ points[k])``.
+
+    Examples
+    --------
+    >>> # one branch g(z) = z**2 along v = (1, 1), fed to two outputs
+    >>> decoupled_map([[1.0], [2.0]], [[1.0], [1.0]], [[1.0]], [[1.0, 2.0]]).tolist()
+    [[9.0, 18.0]]
+    """
+    W = check_array(W, dtype=np.float64, input_name="W")
+    V = check_array(V, dtype=np.float64, input_name="V")
+    coef = _check_coef(coef)
+    points = check_array(points, dtype=np.float64, input_name="points")
+    if not W.shape[1] == V.shape[1] == coef.shape[0]:
+        raise ValueError(
+            f"W has {W.shape[1]} column(s), V {V.shape[1]} column(s) and coef "
+            f"{coef.shape[0]} row(s): all must equal the number of branches r."
+        )
+    if points.shape[1] != V.shape[0]:
+        raise ValueError(
+            f"points has {points.shape[1]} column(s) but V has {V.shape[0]} "
+            "row(s): one column per variable is needed."
+        )
+    return evaluate_branches(coef, points @ V) @ W.T
