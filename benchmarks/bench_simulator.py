@@ -21,22 +21,16 @@ Results are printed and written as JSON (default
     python benchmarks/bench_simulator.py [--data-dir DIR] [--repeat N] [--output FILE]
 """
 import argparse
-import json
-import os
-import platform
-import statistics
-import subprocess
 import sys
 import tempfile
-import time
-from datetime import datetime, timezone
 from pathlib import Path
 
 import numpy as np
 
-REPO = Path(__file__).resolve().parents[1]
-DEFAULT_DATA = Path(os.environ.get("SKLEARN_PNLSS_DATA", REPO.parent / "shared" / "data" / "bouc_wen"))
-DEFAULT_OUTPUT = Path(__file__).resolve().parent / "results" / "simulator.json"
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _bench_utils import DEFAULT_DATA, RESULTS, first_call, header, timeit, write_results  # noqa: E402
+
+DEFAULT_OUTPUT = RESULTS / "simulator.json"
 
 # Runs in a fresh interpreter so that nothing is compiled or loaded yet; the
 # second call on the same (short) input is the run time to subtract.
@@ -56,58 +50,22 @@ print(json.dumps({"import": t1 - t0, "first_call": t2 - t1, "second_call": t3 - 
 """
 
 
-def _first_call(cache_dir=None):
-    env = dict(os.environ)
-    if cache_dir is not None:
-        # A user-provided cache folder takes precedence over the in-tree
-        # __pycache__, so an empty one forces a full compilation without
-        # touching the cache the library normally uses.
-        env["NUMBA_CACHE_DIR"] = str(cache_dir)
-    out = subprocess.run([sys.executable, "-c", _FIRST_CALL], env=env, check=True,
-                         capture_output=True, text=True)
-    times = json.loads(out.stdout.strip().splitlines()[-1])
-    times["compile_or_load"] = times["first_call"] - times["second_call"]
-    return times
-
-
-def _timeit(func, repeat):
-    """Median and minimum wall time of ``repeat`` calls, and the last result."""
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        result = func()
-        times.append(time.perf_counter() - t0)
-    return {"median_s": statistics.median(times), "min_s": min(times), "n": repeat}, result
-
-
 def _relative_rms(y_true, y_pred):
     y_true, y_pred = np.ravel(y_true), np.ravel(y_pred)
     return float(np.sqrt(np.mean((y_true - y_pred) ** 2) / np.mean(y_true**2)))
 
 
 def run(data_dir, repeat):
-    import numba
-    import sklearn_pnlss
     from sklearn_pnlss.datasets import (bouc_wen_oscillator, load_bouc_wen_official,
                                         make_bouc_wen, simulate_bouc_wen)
     from sklearn_pnlss.signals import bouc_wen_sweep, multisine
 
-    results = {
-        "date": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-        "environment": {
-            "python": platform.python_version(),
-            "platform": platform.platform(),
-            "cpu_count": os.cpu_count(),
-            "numpy": np.__version__,
-            "numba": numba.__version__,
-            "sklearn_pnlss": sklearn_pnlss.__version__,
-        },
-    }
+    results = header()
 
     print("numba compilation (first call in a fresh interpreter, 256-sample input)")
     with tempfile.TemporaryDirectory() as empty_cache:
-        cold = _first_call(empty_cache)
-    warm = _first_call()
+        cold = first_call(_FIRST_CALL, empty_cache)
+    warm = first_call(_FIRST_CALL)
     results["compile"] = {"cold_cache": cold, "warm_cache": warm}
     print(f"  cold cache: compile {cold['compile_or_load']:.2f} s "
           f"(first call {cold['first_call']:.2f} s, import {cold['import']:.2f} s)")
@@ -124,17 +82,17 @@ def run(data_dir, repeat):
     u_sweep = bouc_wen_sweep(153000, 750.0)
     timing = {}
     print(f"run times (median of {repeat})")
-    timing["simulate_period_8192"], _ = _timeit(
+    timing["simulate_period_8192"], _ = timeit(
         lambda: simulate_bouc_wen(u_period, periodic=True), repeat)
     print(f"  simulate_bouc_wen, one 8192-sample period (periodic): "
           f"{timing['simulate_period_8192']['median_s']:.3f} s")
-    timing["simulate_sweep_153000"], _ = _timeit(
+    timing["simulate_sweep_153000"], _ = timeit(
         lambda: simulate_bouc_wen(u_sweep, periodic=False, decimation=(20,)), repeat)
     print(f"  simulate_bouc_wen, 153000-sample sweep (from rest):   "
           f"{timing['simulate_sweep_153000']['median_s']:.3f} s")
     for n_jobs in (1, 2):
         key = f"make_bouc_wen_n_jobs_{n_jobs}"
-        timing[key], _ = _timeit(lambda n_jobs=n_jobs: make_bouc_wen(random_state=0, n_jobs=n_jobs), repeat)
+        timing[key], _ = timeit(lambda n_jobs=n_jobs: make_bouc_wen(random_state=0, n_jobs=n_jobs), repeat)
         print(f"  make_bouc_wen() (2 x 2 periods + tests), n_jobs={n_jobs}:    "
               f"{timing[key]['median_s']:.3f} s")
     results["timing"] = timing
@@ -181,10 +139,7 @@ def main(argv=None):
     if args.repeat < 1:
         parser.error("--repeat must be >= 1")
     results = run(args.data_dir, args.repeat)
-    output = Path(args.output)
-    output.parent.mkdir(parents=True, exist_ok=True)
-    output.write_text(json.dumps(results, indent=2) + "\n")
-    print(f"written {output}")
+    write_results(results, args.output)
 
 
 if __name__ == "__main__":
