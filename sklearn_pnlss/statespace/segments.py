@@ -11,7 +11,7 @@ left out of the cost.
 import numpy as np
 
 from ..utils.validation import is_periodic
-from .pnlss import Segment
+from .model_base import Segment
 
 __all__ = ["transient_length", "average_periods", "make_segments"]
 

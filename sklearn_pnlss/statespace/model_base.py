@@ -1,0 +1,136 @@
+"""What every nonlinear state-space model of the library shares.
+
+A model is a linear part plus a static nonlinearity, with its parameters in
+named blocks. Subclasses say which blocks (``_block_names``, in theta order)
+and provide two compiled kernels through ``_run(U, x0)`` (simulation:
+``(Y, X, n_ok, x_end)``) and ``_sensitivity(U, x0, n_skip, J)`` (the exact
+Jacobian of the output by the sensitivity recursion). Simulation of signals
+from rest or in periodic steady state, the training residual and Jacobian
+are written here once.
+"""
+from dataclasses import dataclass, fields, replace
+
+import numpy as np
+
+__all__ = ["DivergenceError", "Segment", "StateSpaceModel"]
+
+
+class DivergenceError(ValueError):
+    """The model's simulation left any reasonable range."""
+
+
+@dataclass
+class Segment:
+    """One training signal ready for simulation: ``U`` is simulated from rest
+    and the first ``n_skip`` samples (a transient) are left out of the cost.
+
+    Optional weighting of the squared error (see
+    :mod:`sklearn_pnlss.statespace.objective`): ``time_weight`` of the shape
+    of ``Y``, or ``freq_weight`` of shape (period // 2 + 1, p) per DFT bin of
+    each ``period``-sample block of ``Y``.
+    """
+
+    U: np.ndarray
+    Y: np.ndarray  # target for U[n_skip:]
+    n_skip: int
+    time_weight: np.ndarray | None = None
+    freq_weight: np.ndarray | None = None
+    period: int | None = None
+
+
+class StateSpaceModel:
+    """Mixin for dataclass models with matrices ``A, B, C, D`` and parameter
+    blocks named by ``_block_names``."""
+
+    _block_names: tuple = ()
+
+    @property
+    def n_states(self):
+        return self.A.shape[0]
+
+    @property
+    def blocks(self):
+        return tuple(getattr(self, name) for name in self._block_names)
+
+    @property
+    def theta(self):
+        return np.concatenate([M.ravel() for M in self.blocks])
+
+    @property
+    def n_params(self):
+        return sum(M.size for M in self.blocks)
+
+    def with_theta(self, theta):
+        """A copy with the parameters ``theta`` (in block order)."""
+        new, i = {}, 0
+        for name, M in zip(self._block_names, self.blocks):
+            new[name] = np.asarray(theta[i : i + M.size]).reshape(M.shape).copy()
+            i += M.size
+        return replace(self, **new)
+
+    def copy(self):
+        return replace(self, **{f.name: np.copy(getattr(self, f.name)) for f in fields(self)})
+
+    def simulate(self, U, x0=None):
+        """Output and final state from ``x0`` (zero by default); raises
+        :class:`DivergenceError` when the state leaves the range."""
+        x0 = np.zeros(self.n_states) if x0 is None else x0
+        Y, _, n_ok, x_end = self._run(np.ascontiguousarray(U), x0)
+        if n_ok < U.shape[0]:
+            raise DivergenceError(f"the simulation diverges at sample {n_ok}")
+        return Y, x_end
+
+    def simulate_states(self, U, x0=None):
+        """States (N, n) along the simulation from ``x0``."""
+        x0 = np.zeros(self.n_states) if x0 is None else x0
+        _, X, n_ok, _ = self._run(np.ascontiguousarray(U), x0)
+        if n_ok < U.shape[0]:
+            raise DivergenceError(f"the simulation diverges at sample {n_ok}")
+        return X
+
+    def steady_state_start(self, U_period, max_periods=200, rtol=1e-10):
+        """State at the start of a period once the response is periodic:
+        period after period from rest until the state repeats."""
+        x = np.zeros(self.n_states)
+        for _ in range(max_periods):
+            _, x_new = self.simulate(U_period, x)
+            done = np.linalg.norm(x_new - x) <= rtol * (1.0 + np.linalg.norm(x_new))
+            x = x_new
+            if done:
+                break
+        return x
+
+    def simulate_signal(self, U, period=None):
+        """Simulate one signal; periodic steady state when ``period`` is
+        given (the length is a multiple of it), else from rest."""
+        x0 = None if period is None else self.steady_state_start(U[:period])
+        return self.simulate(U, x0)[0]
+
+    def segment_error(self, seg):
+        """Simulation error (T, p) on one segment, or None when it diverges."""
+        Y, _, n_ok, _ = self._run(np.ascontiguousarray(seg.U), np.zeros(self.n_states))
+        if n_ok < seg.U.shape[0]:
+            return None
+        return Y[seg.n_skip :] - seg.Y
+
+    def segment_jacobian(self, seg):
+        """Exact Jacobian (T, p, n_params) of :meth:`segment_error`."""
+        J = np.empty((seg.U.shape[0] - seg.n_skip, self.C.shape[0], self.n_params))
+        self._sensitivity(np.ascontiguousarray(seg.U), np.zeros(self.n_states), seg.n_skip, J)
+        return J
+
+    def residual(self, segments):
+        """Stacked unweighted simulation errors, or None when any segment
+        diverges."""
+        out = []
+        for seg in segments:
+            err = self.segment_error(seg)
+            if err is None:
+                return None
+            out.append(err.ravel())
+        return np.concatenate(out)
+
+    def jacobian(self, segments):
+        """Exact Jacobian of :meth:`residual`."""
+        J = [self.segment_jacobian(seg) for seg in segments]
+        return np.concatenate(J).reshape(-1, self.n_params)
