@@ -1,9 +1,11 @@
 """What every dynamic-model estimator of the library shares: the signal
 convention, periodic steady state, the rms-dB score and scikit-learn tags."""
 from sklearn.base import BaseEstimator, RegressorMixin
+from sklearn.utils import TransformerTags
 from sklearn.utils.validation import check_is_fitted
 
 from ..metrics import rms_error
+from ..utils.handover import attach_stage
 from ..utils.validation import is_periodic, restore_layout, signal_layout, validate_signals
 
 __all__ = ["SignalRegressorBase"]
@@ -28,6 +30,27 @@ class SignalRegressorBase(RegressorMixin, BaseEstimator):
         self._y_was_1d = signal_layout(y).kind == "1d"
         self.n_outputs_ = y_list[0].shape[1]
         return X_list, y_list
+
+    def transform(self, X):
+        """Pass the signals on to the next Pipeline stage, with this fitted
+        estimator attached as its start (see
+        :mod:`sklearn_pnlss.utils.handover`).
+
+        Parameters
+        ----------
+        X : signals, as in :meth:`predict`
+
+        Returns
+        -------
+        X : the same signals, unchanged, carrying ``stage=self``
+        """
+        check_is_fitted(self)
+        validate_signals(self, X, reset=False, min_samples=1)
+        return attach_stage(X, self)
+
+    def fit_transform(self, X, y, **fit_params):
+        """:meth:`fit`, then :meth:`transform` (the Pipeline hand-over)."""
+        return self.fit(X, y, **fit_params).transform(X)
 
     def _signal_is_periodic(self, n_samples):
         return is_periodic(n_samples, getattr(self, "period", None))
@@ -81,4 +104,6 @@ class SignalRegressorBase(RegressorMixin, BaseEstimator):
         tags.target_tags.single_output = False
         tags.target_tags.multi_output = True
         tags.input_tags.allow_nan = False
+        # transform is the Pipeline hand-over: signals pass through unchanged.
+        tags.transformer_tags = TransformerTags(preserves_dtype=[])
         return tags

@@ -6,7 +6,7 @@ from sklearn.base import _fit_context
 from sklearn.utils._param_validation import Interval
 
 from ..frequency.bla import periodic_bla, welch_bla
-from ..statespace.linear import modal_parameters, simulate_linear_signal, frequency_response
+from ..statespace.linear import frequency_response, modal_parameters, simulate_linear_signal
 from ..statespace.subspace import fd_refine, fd_subspace
 from ..utils.validation import check_period
 from ._base import SignalRegressorBase

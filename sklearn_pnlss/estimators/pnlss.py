@@ -6,22 +6,18 @@ import numpy as np
 from sklearn.base import _fit_context, clone
 from sklearn.utils._param_validation import Interval, StrOptions
 
-from ..frequency.noise import periodic_noise_variance
-from ..metrics import to_db
-from ..statespace.levenberg_marquardt import levenberg_marquardt
 from ..statespace.linear import simulate_linear_signal
 from ..statespace.monomials import monomial_exponents
-from ..statespace.objective import SimulationError
-from ..statespace.pnlss import DivergenceError, PNLSSModel
-from ..statespace.segments import make_segments, transient_length
-from ..utils.validation import as_signal_list, check_period, validate_signals
-from ._base import SignalRegressorBase
+from ..statespace.pnlss import PNLSSModel
+from ..utils.handover import detach_stage
+from ..utils.validation import check_period
+from ._statespace import StateSpaceRegressorBase
 from .bla import BLAEstimator
 
 __all__ = ["PNLSSRegressor"]
 
 
-class PNLSSRegressor(SignalRegressorBase):
+class PNLSSRegressor(StateSpaceRegressorBase):
     """Polynomial nonlinear state-space model.
 
     ``x(t+1) = A x + B u + E zeta(x, u)``, ``y = C x + D u + F eta(x, u)``,
@@ -90,7 +86,9 @@ class PNLSSRegressor(SignalRegressorBase):
         at most a period, for periodic signals; 0 for the others.
     linear_model : BLAEstimator or None, default=None
         Estimator of the linear start (cloned before fitting); None uses
-        ``BLAEstimator(n_states, period=period)``.
+        ``BLAEstimator(n_states, period=period)``. In a Pipeline after a
+        ``BLAEstimator`` stage, that fitted stage is the start instead
+        (``make_pipeline(BLAEstimator(3, period=P), PNLSSRegressor(3, period=P))``).
     verbose : int, default=0
         Print each iteration: cost in dB (rms of the weighted normalised
         error), lambda, and the validation error when validation signals are
@@ -214,74 +212,36 @@ class PNLSSRegressor(SignalRegressorBase):
         -------
         self
         """
+        X, stage = detach_stage(X)
         X_list, y_list = self._validate_fit_data(X, y)
         period = check_period(self.period)
         weights = self._check_time_weight(time_weight, y_list)
         val = self._check_validation(X_val, y_val)
-        linear = clone(self.linear_model) if self.linear_model is not None else BLAEstimator(self.n_states, period=period)
-        if linear.get_params()["n_states"] != self.n_states:
-            raise ValueError(
-                f"linear_model has n_states={linear.n_states} but n_states={self.n_states}; make them equal."
-            )
-        self.linear_model_ = linear.fit(X_list, y_list)
+        self.linear_model_ = self._linear_start(stage, X_list, y_list, period)
         model = self._normalised_start(X_list, y_list, period)
-        Xn = [U / self._u_scale for U in X_list]
-        yn = [Y / self._y_scale for Y in y_list]
-        n_tr = transient_length(model.A, period) if period else 0
-        if self.n_transient != "auto":
-            n_tr = int(self.n_transient)
-        freq_weight = self._frequency_weight(Xn, yn, period)
-
-        def objective(freq_weight):
-            return SimulationError(make_segments(
-                Xn, yn, period=period, n_transient=n_tr if period else 0,
-                n_skip=0 if self.n_transient == "auto" else int(self.n_transient),
-                average=self.average_periods, time_weights=weights, freq_weight=freq_weight,
-            ))
-
-        # The noise-weighted cost, dominated by the quietest bins, has poor
-        # basins far from its optimum: from the linear start, LM stalls well
-        # above it (measured in tests/test_pnlss_fitting.py). Starting it from
-        # the unweighted optimum reaches it.
-        stages = [objective(None)] if self.weighting != "band" else []
-        if freq_weight is not None:
-            stages.append(objective(freq_weight))
-        self._fit_lm(model, stages, val)
+        self._fit_nonlinear(model, X_list, y_list, period, weights, val)
         self._export_user_units()
         self.n_params_ = self._model.n_params
         self.n_nonlinear_params_ = self._model.E.size + self._model.F.size
         return self
 
-    def _check_time_weight(self, time_weight, y_list):
-        if time_weight is None:
-            return None
-        if self.weighting is not None:
+    def _linear_start(self, stage, X_list, y_list, period):
+        """The fitted BLA handed over by the previous Pipeline stage, or a
+        clone of ``linear_model`` fitted here."""
+        if stage is not None:
+            if not isinstance(stage, BLAEstimator):
+                raise TypeError(
+                    f"PNLSSRegressor starts from a BLAEstimator stage; the previous Pipeline "
+                    f"stage is a {type(stage).__name__}."
+                )
+            linear = stage
+        else:
+            linear = clone(self.linear_model) if self.linear_model is not None else BLAEstimator(self.n_states, period=period)
+        if linear.get_params()["n_states"] != self.n_states:
             raise ValueError(
-                f"time_weight is a time-domain weighting, but weighting={self.weighting!r} "
-                "weights in frequency; pass one of them."
+                f"The linear model has n_states={linear.n_states} but n_states={self.n_states}; make them equal."
             )
-        w_list, _ = as_signal_list(time_weight, name="time_weight", min_samples=1)
-        p = y_list[0].shape[1]
-        if len(w_list) != len(y_list) or any(
-            w.shape[0] != Y.shape[0] or w.shape[1] not in (1, p) for w, Y in zip(w_list, y_list)
-        ):
-            raise ValueError(
-                "time_weight must be given in the layout of y: one weight signal per "
-                "output signal, of the same length, with n_outputs channels or one."
-            )
-        if any(np.any(w < 0) for w in w_list) or not any(np.any(w > 0) for w in w_list):
-            raise ValueError("time_weight must be non-negative with at least one positive value.")
-        return w_list
-
-    def _check_validation(self, X_val, y_val):
-        if (X_val is None) != (y_val is None):
-            raise ValueError("Pass both X_val and y_val, or neither.")
-        if X_val is None:
-            return None
-        Xv, yv, _ = validate_signals(self, X_val, y_val, reset=False)
-        if yv[0].shape[1] != self.n_outputs_:
-            raise ValueError(f"y_val has {yv[0].shape[1]} outputs but y has {self.n_outputs_}.")
-        return Xv, yv
+        return linear if stage is not None else linear.fit(X_list, y_list)
 
     def _normalised_start(self, X_list, y_list, period):
         """The linear start with unit-rms inputs, outputs and states, E = F = 0.
@@ -310,93 +270,6 @@ class PNLSSRegressor(SignalRegressorBase):
             E=np.zeros((n, exE.shape[0])), F=np.zeros((p, exF.shape[0])), exE=exE, exF=exF,
         )
 
-    def _frequency_weight(self, Xn, yn, period):
-        """Callable giving the weight per DFT bin of a periodic segment that
-        averages ``n_averaged`` periods, or None (time domain)."""
-        if self.weighting is None:
-            return None
-        if period is None or not all(self._signal_is_periodic(U.shape[0]) for U in Xn):
-            raise ValueError(
-                f"weighting={self.weighting!r} weights DFT bins of a period: set period and "
-                "pass steady-state signals of whole periods, or use weighting=None."
-            )
-        n_bins = period // 2 + 1
-        lo, hi = (0, n_bins - 1) if self.band is None else map(int, self.band)
-        if not 0 <= lo <= hi < n_bins:
-            raise ValueError(
-                f"band must be (first, last) DFT bins with 0 <= first <= last <= period // 2 = "
-                f"{n_bins - 1}; got {self.band}."
-            )
-        in_band = np.zeros((n_bins, 1))
-        in_band[lo : hi + 1] = 1.0
-        if self.weighting == "band":
-            return lambda n_averaged: np.repeat(in_band, yn[0].shape[1], axis=1)
-        var = periodic_noise_variance(yn, period)
-        if var is None:
-            raise ValueError(
-                "weighting='noise' estimates the noise from the spread over periods: pass "
-                "periodic signals with at least two periods, or use weighting='band'."
-            )
-        # A noiseless bin (simulated data) would get an infinite weight.
-        var = np.maximum(var, 1e-12 * np.mean(var[lo : hi + 1]) + np.finfo(float).tiny)
-        return lambda n_averaged: in_band * n_averaged / var
-
-    def _fit_lm(self, model, objectives, val):
-        """Levenberg-Marquardt through each objective in turn, each stage
-        starting where the previous one ended; keeps the last iterate, or
-        the one best on the validation signals over all stages."""
-        n = model.A.shape[0]
-        val_history, best = [], {"err": np.inf, "theta": model.theta, "it": 0}
-        done = 0  # iterations of the earlier stages
-
-        def validation_error(theta):
-            if val is None:
-                return np.nan
-            cand = model.with_theta(theta)
-            try:
-                err = [
-                    cand.simulate_signal(U / self._u_scale, self.period if self._signal_is_periodic(U.shape[0]) else None)
-                    * self._y_scale - Y
-                    for U, Y in zip(*val)
-                ]
-            except DivergenceError:
-                return np.inf
-            return float(to_db(np.sqrt(np.mean(np.concatenate(err) ** 2))))
-
-        def callback(it, theta, cost, lam):
-            v = validation_error(theta)
-            val_history.append(v)
-            if v < best["err"]:
-                best.update(err=v, theta=theta.copy(), it=done + it)
-            if self.verbose:
-                msg = f"iteration {done + it:4d}  cost {10 * np.log10(cost / n_res):8.2f} dB  lambda {lam:9.3g}"
-                print(msg + (f"  validation {v:8.2f} dB" if val is not None else ""), flush=True)
-
-        theta = model.theta
-        for stage, objective in enumerate(objectives):
-            n_res = sum(seg.Y.size for seg in objective.segments)
-            e0 = objective.residual(model.with_theta(theta))
-            if e0 is None:
-                raise ValueError(
-                    "The linear start diverges on the training data; check the data or give "
-                    "a stable linear_model."
-                )
-            if stage == 0:
-                callback(0, theta, float(e0 @ e0), np.nan)
-            result = levenberg_marquardt(
-                lambda th, obj=objective: obj.residual(model.with_theta(th)),
-                lambda th, obj=objective: obj.normal_equations(model.with_theta(th)),
-                theta, n_drop=n * n, max_iter=self.max_iter, tol=self.tol, callback=callback,
-            )
-            theta = result.theta
-            done += result.n_iter
-        keep, self.best_iteration_ = (best["theta"], best["it"]) if val is not None else (theta, done)
-        self._model = model.with_theta(keep)
-        self.n_iter_ = done
-        self.cost_history_ = np.array([h[1] for h in result.history])
-        if val is not None:
-            self.validation_history_ = np.array(val_history)
-
     def _export_user_units(self):
         """Matrices in the user's units from the normalised model."""
         mdl = self._model
@@ -413,14 +286,3 @@ class PNLSSRegressor(SignalRegressorBase):
         self.exponents_E_ = mdl.exE.copy()
         self.exponents_F_ = mdl.exF.copy()
 
-    def _predict_signal(self, U, periodic):
-        Un = U / self._u_scale
-        try:
-            Yn = self._model.simulate_signal(Un, self.period if periodic else None)
-        except DivergenceError as exc:
-            raise ValueError(
-                f"{type(self).__name__}.predict: {exc}; the input drives the model far "
-                "outside the range it was fitted on (larger amplitude or other "
-                "frequencies than the training data)."
-            ) from None
-        return Yn * self._y_scale
