@@ -95,7 +95,7 @@ class _Timers:
 
 def _timed_fit(X, y, degrees, iterations, average):
     """One instrumented fit; per-call times of the pieces."""
-    import sklearn_pnlss.estimators.pnlss as est_module
+    import sklearn_pnlss.estimators._statespace as est_module
     from sklearn_pnlss import PNLSSRegressor
     from sklearn_pnlss.statespace.objective import SimulationError
     from sklearn_pnlss.statespace.pnlss import PNLSSModel
