@@ -1,0 +1,127 @@
+"""A decoupled model started from a full PNLSS model.
+
+The nonlinear part of a PNLSS model, ``f(s) = [E zeta(s); F eta(s)]`` with
+``s = [x; u]``, is sampled along a simulated trajectory, its Jacobian tensor
+is decomposed (CPD) and the branch derivatives are fitted and integrated
+(see :mod:`sklearn_pnlss.decoupling`). The result ``W g(V^T s)`` gives the
+starting point of a :class:`~sklearn_pnlss.statespace.decoupled.DecoupledModel`.
+"""
+import numbers
+
+import numpy as np
+from sklearn.utils import check_random_state
+from sklearn.utils.validation import check_array
+
+from ..statespace.decoupled import DecoupledModel
+from .branches import fit_branches
+from .cpd import decompose_jacobian
+from .jacobian_tensor import polynomial_jacobian, sample_points
+
+__all__ = ["decoupled_start"]
+
+
+def _split_linear(M, exponents, n):
+    """Columns of a polynomial's coefficients ``M`` by the total degree of
+    their monomial: the linear part (as matrices over x and u) and the
+    coefficients / exponents of degree >= 2. Constant terms are dropped (the
+    model has no constant offsets)."""
+    exponents = np.asarray(exponents, dtype=np.int64)
+    degree = exponents.sum(axis=1)
+    lin_x = np.zeros((M.shape[0], n))
+    lin_u = np.zeros((M.shape[0], exponents.shape[1] - n))
+    for j in np.flatnonzero(degree == 1):
+        v = int(np.argmax(exponents[j]))
+        if v < n:
+            lin_x[:, v] += M[:, j]
+        else:
+            lin_u[:, v - n] += M[:, j]
+    keep = degree >= 2
+    return lin_x, lin_u, M[:, keep], exponents[keep]
+
+
+def decoupled_start(pnlss_model, states_inputs, n_branches, degree, *, n_points=500, random_state=None):
+    """Decoupled model that approximates a PNLSS model's polynomial.
+
+    Parameters
+    ----------
+    pnlss_model : PNLSSModel
+        Full polynomial model ``x(t+1) = A x + B u + E zeta(s)``,
+        ``y = C x + D u + F eta(s)``.
+    states_inputs : array-like of shape (n_samples, n + m)
+        Trajectory ``s(t) = [x(t); u(t)]`` of a simulation of the training
+        inputs; the points of the Jacobian tensor are drawn from it.
+    n_branches : int
+        Number of branches ``r`` (rank of the CPD).
+    degree : int
+        Degree ``d >= 2`` of the branches.
+    n_points : int, default=500
+        Number of sampling points.
+    random_state : int, RandomState, Generator or None, default=None
+        Controls the sampling points and the random start of the CPD.
+
+    Returns
+    -------
+    model : DecoupledModel
+        ``A, B, C, D`` of the PNLSS model, ``Wx`` and ``Wy`` the state and
+        output rows of the CPD's ``W`` and ``V`` its directions, ``G`` of
+        shape (r, d) with ``G[:, 0] = 0``. ``output_branches`` is True when
+        ``F`` has columns.
+    cpd_error : float
+        Relative Frobenius error of the CPD of the Jacobian tensor.
+
+    Notes
+    -----
+    The CPD's ``W`` and ``V`` have unit-norm columns and ``H`` carries the
+    scale, ``H[k, l] ~ g_l'(V[:, l] . s_k)``; the branches fitted against
+    ``z = V^T s`` with these very factors therefore give
+    ``W g(V^T s) ~ f(s)`` without any rescaling.
+
+    The branches have no linear term (``G[:, 0] = 0``): the linear part of
+    the model stays in ``A, B, C, D``. Degree-1 monomials of ``E`` / ``F``, if
+    any, are added to ``A, B`` / ``C, D`` and left out of the tensor;
+    constant monomials are dropped.
+
+    Raises ``ValueError`` when the polynomial is zero on the points (nothing
+    to decouple).
+    """
+    n = pnlss_model.A.shape[0]
+    m = pnlss_model.B.shape[1]
+    p = pnlss_model.C.shape[0]
+    states_inputs = check_array(states_inputs, dtype=np.float64, input_name="states_inputs")
+    if states_inputs.shape[1] != n + m:
+        raise ValueError(
+            f"states_inputs must have n_states + n_inputs = {n + m} columns ([x; u]); "
+            f"got {states_inputs.shape[1]}."
+        )
+    if not isinstance(degree, numbers.Integral) or isinstance(degree, bool) or degree < 2:
+        raise ValueError(f"degree must be an integer >= 2; got {degree!r}.")
+    degree = int(degree)
+    # One random stream for both the points and the CPD start, so an int seed
+    # fixes the whole start.
+    rng = random_state if isinstance(random_state, np.random.Generator) else check_random_state(random_state)
+
+    Ex_lin, Eu_lin, E, exE = _split_linear(np.asarray(pnlss_model.E, dtype=np.float64), pnlss_model.exE, n)
+    Fx_lin, Fu_lin, F, exF = _split_linear(np.asarray(pnlss_model.F, dtype=np.float64), pnlss_model.exF, n)
+    output_branches = pnlss_model.F.shape[1] > 0
+
+    points = sample_points(states_inputs, n_points=n_points, random_state=rng)
+    J = polynomial_jacobian(E, exE, points)
+    if output_branches:
+        J = np.concatenate([J, polynomial_jacobian(F, exF, points)], axis=0)
+    W, V, H, cpd_error = decompose_jacobian(J, n_branches, random_state=rng)
+    coef = fit_branches(V, H, points, degree)
+
+    G = np.zeros((W.shape[1], degree))
+    G[:, 1:] = coef
+    model = DecoupledModel(
+        A=pnlss_model.A + Ex_lin,
+        B=pnlss_model.B + Eu_lin,
+        C=pnlss_model.C + Fx_lin,
+        D=pnlss_model.D + Fu_lin,
+        Wx=np.ascontiguousarray(W[:n]),
+        Wy=np.ascontiguousarray(W[n:]) if output_branches else np.zeros((p, W.shape[1])),
+        V=np.ascontiguousarray(V),
+        G=G,
+        output_branches=output_branches,
+    )
+    return model, cpd_error

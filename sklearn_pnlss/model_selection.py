@@ -1,0 +1,71 @@
+"""Model selection on whole signals.
+
+scikit-learn's splitters already split along the first axis, which is the
+signal axis here, so ``KFold`` keeps signals whole. What the field does in
+addition is to select on dedicated test signals (a multisine and a swept
+sine, say) that are never used for training: :func:`held_out_signals` puts
+training and test signals in one list with the one split that does that.
+"""
+import numpy as np
+
+from .metrics import rms_error
+from .utils.validation import as_signal_list
+
+__all__ = ["held_out_signals", "mean_rms_db_scorer"]
+
+
+def held_out_signals(X_train, y_train, X_test, y_test):
+    """Training and test signals in one list, with the split between them.
+
+    Parameters
+    ----------
+    X_train, y_train : signals used for fitting
+    X_test, y_test : signals used for scoring only (lengths may differ)
+
+    Returns
+    -------
+    X, y : list of ndarray
+        Training signals first, then test signals.
+    cv : list of one (train_indices, test_indices) pair
+        For ``GridSearchCV(..., cv=cv, refit=False)``: GridSearchCV refits
+        on every signal it was given, test signals included, so refit the
+        best parameters on the training signals yourself
+        (``clone(est).set_params(**search.best_params_).fit(X_train, y_train)``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> X, y, cv = held_out_signals(np.zeros((2, 64, 1)), np.zeros((2, 64, 1)),
+    ...                             [np.zeros((100, 1))], [np.zeros((100, 1))])
+    >>> len(X), [part.tolist() for part in cv[0]]
+    (3, [[0, 1], [2]])
+    """
+    Xa, _ = as_signal_list(X_train, name="X_train")
+    ya, _ = as_signal_list(y_train, name="y_train")
+    Xb, _ = as_signal_list(X_test, name="X_test")
+    yb, _ = as_signal_list(y_test, name="y_test")
+    if len(Xa) != len(ya) or len(Xb) != len(yb):
+        raise ValueError("X_train/y_train and X_test/y_test must hold as many input as output signals.")
+    train = np.arange(len(Xa))
+    test = np.arange(len(Xa), len(Xa) + len(Xb))
+    return Xa + Xb, ya + yb, [(train, test)]
+
+
+def mean_rms_db_scorer(estimator, X, y):
+    """Scorer: minus the mean over signals of each signal's rms error in dB.
+
+    Unlike :func:`~sklearn_pnlss.metrics.rms_db_scorer`, which pools all
+    samples (a 153000-sample sweep then outweighs an 8192-sample multisine),
+    every test signal counts the same, as when a model is selected on both a
+    multisine and a sweep.
+
+    Examples
+    --------
+    >>> from sklearn_pnlss.model_selection import mean_rms_db_scorer
+    >>> callable(mean_rms_db_scorer)
+    True
+    """
+    y_list, _ = as_signal_list(y, name="y")
+    X_list, _ = as_signal_list(X, name="X")
+    pred = estimator.predict(X_list)
+    return -float(np.mean([rms_error(t, p, db=True) for t, p in zip(y_list, pred)]))

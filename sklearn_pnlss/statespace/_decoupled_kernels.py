@@ -1,0 +1,202 @@
+"""Compiled time recursions of the decoupled polynomial state-space model.
+
+    z = V^T s,   s = [x; u],   g_l(z_l) = sum_k G[b, k] z_l ** (k + 1)
+    x(t+1) = A x + B u + Wx g(z),   y = C x + D u + Wy g(z)
+
+Parameters are ordered theta = [A, B, Wx, V, G | C, D (, Wy)] (row-major
+blocks): the first group moves the state, the second only the output; ``Wy``
+is a parameter only when the output branches are (``out_branch_params``).
+``V`` and ``G`` move the state and, through ``Wy g(z)``, also enter the
+output directly.
+
+The Jacobian of the simulated output comes from the sensitivity recursion
+
+    dx/dtheta(t+1) = (A + Wx diag(g'(z)) Vx^T) dx/dtheta(t) + direct term
+    dy/dtheta(t)   = (C + Wy diag(g'(z)) Vx^T) dx/dtheta(t) + direct term
+
+(``Vx``: the rows of ``V`` that multiply the states), one pass over time for
+all parameters at once. As in :mod:`._pnlss_kernels`, the loops are written
+out (no ``@`` on small arrays, which would allocate at every sample) and the
+powers ``z ** k`` are built by repeated multiplication (no ``pow`` calls).
+"""
+import numba
+import numpy as np
+
+from ._pnlss_kernels import DIVERGENCE_BOUND
+
+_jit = numba.njit(cache=True, nogil=True, inline="always")
+
+
+@_jit
+def _stack(x, u, s):
+    n = x.shape[0]
+    for i in range(n):
+        s[i] = x[i]
+    for i in range(u.shape[0]):
+        s[n + i] = u[i]
+
+
+@_jit
+def _branches(V, G, s, zp, g, dg):
+    """Branch values ``g``, derivatives ``dg`` and powers
+    ``zp[b, k] = z_b ** (k + 1)`` at ``z = V^T s``."""
+    r, d = G.shape
+    for b in range(r):
+        z = 0.0
+        for j in range(s.shape[0]):
+            z += V[j, b] * s[j]
+        val = 0.0
+        der = 0.0
+        zk = 1.0  # z ** k
+        for k in range(d):
+            der += (k + 1) * G[b, k] * zk
+            zk *= z
+            zp[b, k] = zk
+            val += G[b, k] * zk
+        g[b] = val
+        dg[b] = der
+
+
+@_jit
+def _affine(M, v, N, w, P, z, out):
+    """out = M v + N w + P z (the state or output update)."""
+    for i in range(out.shape[0]):
+        acc = 0.0
+        for k in range(v.shape[0]):
+            acc += M[i, k] * v[k]
+        for k in range(w.shape[0]):
+            acc += N[i, k] * w[k]
+        for k in range(z.shape[0]):
+            acc += P[i, k] * z[k]
+        out[i] = acc
+
+
+@_jit
+def _linearised(L, W, dg, V, out):
+    """out = L + W diag(dg) Vx^T, the local linear map of x (Vx: the first
+    ``L.shape[1]`` rows of V)."""
+    for i in range(L.shape[0]):
+        for k in range(L.shape[1]):
+            acc = L[i, k]
+            for b in range(W.shape[1]):
+                acc += W[i, b] * dg[b] * V[k, b]
+            out[i, k] = acc
+
+
+@_jit
+def _branch_direct(w, dg, s, zp, oV, oG, row):
+    """Add the direct dependence of ``w . g(V^T s)`` on V and G to ``row``."""
+    r, d = zp.shape
+    for b in range(r):
+        c = w[b]
+        if c == 0.0:
+            continue
+        cd = c * dg[b]
+        for j in range(s.shape[0]):
+            row[oV + j * r + b] += cd * s[j]
+        for k in range(d):
+            row[oG + b * d + k] += c * zp[b, k]
+
+
+@numba.njit(cache=True, nogil=True)
+def decoupled_simulate(A, B, C, D, Wx, Wy, V, G, U, x0):
+    """Simulate; returns (Y, X, n_ok, x_end). n_ok < len(U) means the state
+    left the range (divergence) after sample n_ok - 1."""
+    N, m = U.shape
+    n = A.shape[0]
+    p = C.shape[0]
+    r, d = G.shape
+    s = np.empty(n + m)
+    zp = np.empty((r, d))
+    g = np.empty(r)
+    dg = np.empty(r)
+    Y = np.empty((N, p))
+    X = np.empty((N, n))
+    x = x0.copy()
+    x_next = np.empty(n)
+    for t in range(N):
+        _stack(x, U[t], s)
+        _branches(V, G, s, zp, g, dg)
+        X[t] = x
+        _affine(C, x, D, U[t], Wy, g, Y[t])
+        _affine(A, x, B, U[t], Wx, g, x_next)
+        x, x_next = x_next, x
+        for i in range(n):
+            if not np.abs(x[i]) < DIVERGENCE_BOUND:  # also catches NaN
+                return Y, X, t + 1, x
+    return Y, X, N, x
+
+
+@numba.njit(cache=True, nogil=True)
+def decoupled_jacobian(A, B, C, D, Wx, Wy, V, G, U, x0, n_skip, out_branch_params, J):
+    """Output sensitivities dy(t)/dtheta for t >= n_skip, written to
+    J[(t - n_skip), :, :] (shape (N - n_skip, p, n_theta)). ``Wy`` is a
+    parameter (the last block) only when ``out_branch_params``; otherwise it
+    is held fixed, but still enters the output."""
+    N, m = U.shape
+    n = A.shape[0]
+    p = C.shape[0]
+    r, d = G.shape
+    oA = 0
+    oB = oA + n * n
+    oW = oB + n * m
+    oV = oW + n * r
+    oG = oV + (n + m) * r
+    n_sx = oG + r * d  # parameters that move the state
+    oC = n_sx
+    oD = oC + p * n
+    oWy = oD + p * m
+    s = np.empty(n + m)
+    zp = np.empty((r, d))
+    g = np.empty(r)
+    dg = np.empty(r)
+    Sx = np.zeros((n, n_sx))  # dx/dtheta for the state-moving parameters
+    Sx_next = np.empty((n, n_sx))
+    Ax = np.empty((n, n))  # A + Wx diag(g') Vx^T
+    Cx = np.empty((p, n))  # C + Wy diag(g') Vx^T
+    x = x0.copy()
+    x_next = np.empty(n)
+    for t in range(N):
+        u = U[t]
+        _stack(x, u, s)
+        _branches(V, G, s, zp, g, dg)
+        _linearised(A, Wx, dg, V, Ax)
+        if t >= n_skip:
+            _linearised(C, Wy, dg, V, Cx)
+            Jt = J[t - n_skip]
+            for a in range(p):
+                row = Jt[a]
+                for q in range(row.shape[0]):
+                    row[q] = 0.0
+                for k in range(n):
+                    c = Cx[a, k]
+                    for q in range(n_sx):
+                        row[q] += c * Sx[k, q]
+                _branch_direct(Wy[a], dg, s, zp, oV, oG, row)
+                for k in range(n):
+                    row[oC + a * n + k] = x[k]
+                for k in range(m):
+                    row[oD + a * m + k] = u[k]
+                if out_branch_params:
+                    for b in range(r):
+                        row[oWy + a * r + b] = g[b]
+        # Sensitivity of the next state: the propagated part, then the
+        # direct dependence of row i on the parameters.
+        for i in range(n):
+            row = Sx_next[i]
+            for q in range(n_sx):
+                row[q] = 0.0
+            for k in range(n):
+                c = Ax[i, k]
+                for q in range(n_sx):
+                    row[q] += c * Sx[k, q]
+            for k in range(n):
+                row[oA + i * n + k] += x[k]
+            for k in range(m):
+                row[oB + i * m + k] += u[k]
+            for b in range(r):
+                row[oW + i * r + b] += g[b]
+            _branch_direct(Wx[i], dg, s, zp, oV, oG, row)
+        Sx, Sx_next = Sx_next, Sx
+        _affine(A, x, B, u, Wx, g, x_next)
+        x, x_next = x_next, x

@@ -1,0 +1,94 @@
+"""The decoupled polynomial nonlinear state-space model."""
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._decoupled_kernels import decoupled_jacobian, decoupled_simulate
+from .model_base import DivergenceError, Segment, StateSpaceModel
+
+__all__ = ["DecoupledModel", "DivergenceError", "Segment"]
+
+_STATE_BLOCKS = ("A", "B", "Wx", "V", "G")
+
+
+@dataclass
+class DecoupledModel(StateSpaceModel):
+    """x(t+1) = A x + B u + Wx g(V^T s), y = C x + D u + Wy g(V^T s), s = [x; u].
+
+    ``r`` univariate polynomial branches ``g_l(z) = sum_k G[l, k] z**(k+1)``
+    (degrees 1..d) of the projections ``z = V^T s`` replace the full
+    multivariate polynomial of a PNLSS model.
+
+    Parameters
+    ----------
+    A, B, C, D : ndarray of shape (n, n), (n, m), (p, n), (p, m)
+        The linear part.
+    Wx : ndarray of shape (n, r)
+        How the branches enter the state equation.
+    Wy : ndarray of shape (p, r)
+        How the branches enter the output equation; a parameter only when
+        ``output_branches`` (otherwise held fixed, normally at zero).
+    V : ndarray of shape (n + m, r)
+        Branch directions over ``s = [x; u]``.
+    G : ndarray of shape (r, d)
+        ``G[l, k]`` multiplies ``z_l ** (k + 1)``.
+    output_branches : bool, default=False
+        Whether ``Wy`` is a parameter.
+
+    Notes
+    -----
+    Parameter vector order: A, B, Wx, V, G, C, D, then Wy when
+    ``output_branches`` (row-major blocks): the blocks that move the state
+    first, as the Jacobian kernel expects.
+    """
+
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    D: np.ndarray
+    Wx: np.ndarray
+    Wy: np.ndarray
+    V: np.ndarray
+    G: np.ndarray
+    output_branches: bool = False
+
+    def __post_init__(self):
+        # ``copy`` of the base copies every field with np.copy; keep the flag
+        # a plain bool (numba specialises the kernel on its type).
+        self.output_branches = bool(self.output_branches)
+        n, m, p = self.A.shape[0], self.B.shape[1], self.C.shape[0]
+        r, d = self.G.shape
+        expected = {
+            "A": (n, n), "B": (n, m), "C": (p, n), "D": (p, m),
+            "Wx": (n, r), "Wy": (p, r), "V": (n + m, r), "G": (r, d),
+        }
+        for name, shape in expected.items():
+            if getattr(self, name).shape != shape:
+                raise ValueError(f"{name} must have shape {shape}; got {getattr(self, name).shape}.")
+
+    @property
+    def _block_names(self):
+        out = ("Wy",) if self.output_branches else ()
+        return _STATE_BLOCKS + ("C", "D") + out
+
+    @property
+    def n_branches(self):
+        return self.G.shape[0]
+
+    @property
+    def degree(self):
+        return self.G.shape[1]
+
+    @property
+    def n_nonlinear_params(self):
+        """Parameters of the branches: Wx, V and G, (2n + m + d) r, plus Wy
+        when ``output_branches``."""
+        return self.Wx.size + self.V.size + self.G.size + (self.Wy.size if self.output_branches else 0)
+
+    def _run(self, U, x0):
+        return decoupled_simulate(self.A, self.B, self.C, self.D, self.Wx, self.Wy, self.V, self.G, U, x0)
+
+    def _sensitivity(self, U, x0, n_skip, J):
+        decoupled_jacobian(
+            self.A, self.B, self.C, self.D, self.Wx, self.Wy, self.V, self.G, U, x0, n_skip, self.output_branches, J
+        )

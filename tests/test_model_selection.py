@@ -1,0 +1,63 @@
+"""Selection on whole signals: held-out test signals, GridSearchCV with
+joblib workers and on a Dask cluster."""
+import numpy as np
+import pytest
+from joblib import parallel_backend
+from sklearn.model_selection import GridSearchCV
+
+from sklearn_pnlss import PNLSSRegressor
+from sklearn_pnlss.model_selection import held_out_signals, mean_rms_db_scorer
+from sklearn_pnlss.signals import multisine, swept_sine
+from sklearn_pnlss.statespace.monomials import monomial_exponents
+from sklearn_pnlss.statespace.pnlss import PNLSSModel
+
+N = 256
+
+
+def _truth():
+    """Two states, an odd (cubic) nonlinearity: degree 3 is what it needs."""
+    exE = monomial_exponents(3, (2, 3), active=[True, True, False])
+    E = np.zeros((2, len(exE)))
+    E[0, np.flatnonzero((exE == [3, 0, 0]).all(axis=1))] = -0.1
+    return PNLSSModel(A=np.array([[0.8, 0.3], [-0.3, 0.6]]), B=np.array([[0.5], [0.2]]),
+                      C=np.array([[1.0, 0.0]]), D=np.zeros((1, 1)), E=E, F=np.zeros((1, 0)),
+                      exE=exE, exF=np.zeros((0, 3), dtype=np.int64))
+
+
+def _train_test():
+    truth = _truth()
+    X, _ = multisine(N, fs=1.0, f_band=(0.01, 0.45), rms=0.5, n_periods=2, n_realizations=3, random_state=0)
+    y = np.stack([truth.simulate_signal(x, period=N) for x in X])
+    X_ms, _ = multisine(N, fs=1.0, f_band=(0.01, 0.45), rms=0.5, random_state=1)
+    sweep = 0.7 * swept_sine(1500, fs=1.0, f_start=0.01, f_stop=0.3)[:, None]
+    X_test = [X_ms[0], sweep]
+    y_test = [truth.simulate_signal(X_ms[0], period=N), truth.simulate_signal(sweep)]
+    return held_out_signals(X, y, X_test, y_test)
+
+
+def _search(n_jobs):
+    X, y, cv = _train_test()
+    grid = {"degrees": [(2,), (2, 3)]}
+    search = GridSearchCV(PNLSSRegressor(2, period=N, variables="states", max_iter=20), grid,
+                          cv=cv, scoring=mean_rms_db_scorer, n_jobs=n_jobs, refit=False)
+    return search.fit(X, y)
+
+
+def test_grid_search_on_held_out_signals_picks_the_cubic_model():
+    search = _search(n_jobs=2)
+    assert search.best_params_ == {"degrees": (2, 3)}
+    scores = search.cv_results_["mean_test_score"]
+    assert scores.max() > scores.min() + 20  # the quadratic model cannot fit a cubic
+    assert search.best_score_ > 60
+
+
+def test_grid_search_on_a_dask_cluster():
+    distributed = pytest.importorskip("dask.distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, distributed.Client(cluster):
+        with parallel_backend("dask"):
+            search = _search(n_jobs=-1)
+    reference = _search(n_jobs=1)
+    assert search.best_params_ == reference.best_params_
+    np.testing.assert_allclose(search.cv_results_["mean_test_score"],
+                               reference.cv_results_["mean_test_score"], rtol=1e-10)
