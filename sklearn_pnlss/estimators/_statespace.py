@@ -1,6 +1,8 @@
 """What the nonlinear state-space regressors share: internal scaling, the
 weighted simulation-error objectives, Levenberg-Marquardt with validation,
 simulation for predict, and the Pipeline hand-over."""
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..frequency.noise import periodic_noise_variance
@@ -12,7 +14,19 @@ from ..statespace.segments import make_segments, transient_length
 from ..utils.validation import as_signal_list, validate_signals
 from ._base import SignalRegressorBase
 
-__all__ = ["StateSpaceRegressorBase"]
+__all__ = ["LMFit", "StateSpaceRegressorBase"]
+
+
+@dataclass
+class LMFit:
+    """Outcome of one Levenberg-Marquardt run (see ``_optimise``)."""
+
+    model: object
+    n_iter: int
+    best_iteration: int
+    cost_history: np.ndarray
+    validation_history: np.ndarray | None
+    validation_error: float  # dB, best over the iterations; NaN without validation
 
 
 class StateSpaceRegressorBase(SignalRegressorBase):
@@ -27,10 +41,16 @@ class StateSpaceRegressorBase(SignalRegressorBase):
     """
 
     def _fit_nonlinear(self, model, X_list, y_list, period, weights, val):
-        """LM from ``model`` (normalised units) on the training signals."""
+        """LM from ``model`` (normalised units) on the training signals; sets
+        the fitted attributes."""
+        self._set_fit_result(self._optimise(model, self._objectives(X_list, y_list, period, weights, model.A), val))
+
+    def _objectives(self, X_list, y_list, period, weights, A):
+        """The LM stages: the (time-weighted) simulation error, then the
+        frequency-weighted one when ``weighting`` asks for it."""
         Xn = [U / self._u_scale for U in X_list]
         yn = [Y / self._y_scale for Y in y_list]
-        n_tr = transient_length(model.A, period) if period else 0
+        n_tr = transient_length(A, period) if period else 0
         if self.n_transient != "auto":
             n_tr = int(self.n_transient)
         freq_weight = self._frequency_weight(Xn, yn, period)
@@ -49,7 +69,7 @@ class StateSpaceRegressorBase(SignalRegressorBase):
         stages = [objective(None)] if self.weighting != "band" else []
         if freq_weight is not None:
             stages.append(objective(freq_weight))
-        self._fit_lm(model, stages, val)
+        return stages
 
     def _check_time_weight(self, time_weight, y_list):
         if time_weight is None:
@@ -113,10 +133,11 @@ class StateSpaceRegressorBase(SignalRegressorBase):
         var = np.maximum(var, 1e-12 * np.mean(var[lo : hi + 1]) + np.finfo(float).tiny)
         return lambda n_averaged: in_band * n_averaged / var
 
-    def _fit_lm(self, model, objectives, val):
+    def _optimise(self, model, objectives, val):
         """Levenberg-Marquardt through each objective in turn, each stage
         starting where the previous one ended; keeps the last iterate, or
-        the one best on the validation signals over all stages."""
+        the one best on the validation signals over all stages. Pure (no
+        attribute set), so that several starts can run in parallel."""
         val_history, best = [], {"err": np.inf, "theta": model.theta, "it": 0}
         done = 0  # iterations of the earlier stages
 
@@ -148,10 +169,7 @@ class StateSpaceRegressorBase(SignalRegressorBase):
             n_res = sum(seg.Y.size for seg in objective.segments)
             e0 = objective.residual(model.with_theta(theta))
             if e0 is None:
-                raise ValueError(
-                    "The linear start diverges on the training data; check the data or give "
-                    "a stable linear_model."
-                )
+                raise DivergenceError("the start model diverges on the training data")
             if stage == 0:
                 callback(0, theta, float(e0 @ e0), np.nan)
             result = levenberg_marquardt(
@@ -161,12 +179,21 @@ class StateSpaceRegressorBase(SignalRegressorBase):
             )
             theta = result.theta
             done += result.n_iter
-        keep, self.best_iteration_ = (best["theta"], best["it"]) if val is not None else (theta, done)
-        self._model = model.with_theta(keep)
-        self.n_iter_ = done
-        self.cost_history_ = np.array([h[1] for h in result.history])
-        if val is not None:
-            self.validation_history_ = np.array(val_history)
+        keep, best_it = (best["theta"], best["it"]) if val is not None else (theta, done)
+        return LMFit(
+            model=model.with_theta(keep), n_iter=done, best_iteration=best_it,
+            cost_history=np.array([h[1] for h in result.history]),
+            validation_history=np.array(val_history) if val is not None else None,
+            validation_error=best["err"] if val is not None else np.nan,
+        )
+
+    def _set_fit_result(self, fit):
+        self._model = fit.model
+        self.n_iter_ = fit.n_iter
+        self.best_iteration_ = fit.best_iteration
+        self.cost_history_ = fit.cost_history
+        if fit.validation_history is not None:
+            self.validation_history_ = fit.validation_history
 
     def _predict_signal(self, U, periodic):
         Un = U / self._u_scale

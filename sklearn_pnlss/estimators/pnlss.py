@@ -8,7 +8,7 @@ from sklearn.utils._param_validation import Interval, StrOptions
 
 from ..statespace.linear import simulate_linear_signal
 from ..statespace.monomials import monomial_exponents
-from ..statespace.pnlss import PNLSSModel
+from ..statespace.pnlss import DivergenceError, PNLSSModel
 from ..utils.handover import detach_stage
 from ..utils.validation import check_period
 from ._statespace import StateSpaceRegressorBase
@@ -219,7 +219,13 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         val = self._check_validation(X_val, y_val)
         self.linear_model_ = self._linear_start(stage, X_list, y_list, period)
         model = self._normalised_start(X_list, y_list, period)
-        self._fit_nonlinear(model, X_list, y_list, period, weights, val)
+        try:
+            self._fit_nonlinear(model, X_list, y_list, period, weights, val)
+        except DivergenceError:
+            raise ValueError(
+                "The linear start diverges on the training data; check the data or give "
+                "a stable linear_model."
+            ) from None
         self._export_user_units()
         self.n_params_ = self._model.n_params
         self.n_nonlinear_params_ = self._model.E.size + self._model.F.size
