@@ -1,11 +1,11 @@
 """Nonlinear system identification with scikit-learn's API."""
 from importlib.metadata import PackageNotFoundError, version
 
-from .estimators import BLAEstimator, PNLSSRegressor
+from .estimators import BLAEstimator, DecoupledPNLSSRegressor, PNLSSRegressor
 
 try:
     __version__ = version("sklearn_pnlss")
 except PackageNotFoundError:  # pragma: no cover - running from a source tree
     __version__ = "0+unknown"
 
-__all__ = ["BLAEstimator", "PNLSSRegressor", "__version__"]
+__all__ = ["BLAEstimator", "DecoupledPNLSSRegressor", "PNLSSRegressor", "__version__"]

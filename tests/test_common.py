@@ -9,6 +9,7 @@ from sklearn.base import BaseEstimator
 from sklearn.utils.estimator_checks import parametrize_with_checks
 
 import sklearn_pnlss
+from sklearn_pnlss import PNLSSRegressor
 
 # Checks that cannot hold for a dynamic model, and why.
 DYNAMIC_MODEL_FAILURES = {
@@ -42,7 +43,13 @@ def all_estimators():
 
 # Settings that keep the many small fits of the checks fast; the checks are
 # about the API, the accuracy tests elsewhere use full settings.
-FAST_SETTINGS = {"PNLSSRegressor": {"max_iter": 2}}
+FAST_SETTINGS = {
+    "PNLSSRegressor": {"max_iter": 2},
+    "DecoupledPNLSSRegressor": {
+        "n_branches": 1, "degree": 3, "n_init": 1, "n_points": 50, "max_iter": 2,
+        "start_model": PNLSSRegressor(max_iter=2),
+    },
+}
 
 
 def expected_failed_checks(estimator):

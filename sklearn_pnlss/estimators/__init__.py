@@ -1,5 +1,6 @@
 """The estimators: BLA (linear) and polynomial nonlinear state-space."""
 from .bla import BLAEstimator
+from .decoupled import DecoupledPNLSSRegressor
 from .pnlss import PNLSSRegressor
 
-__all__ = ["BLAEstimator", "PNLSSRegressor"]
+__all__ = ["BLAEstimator", "DecoupledPNLSSRegressor", "PNLSSRegressor"]

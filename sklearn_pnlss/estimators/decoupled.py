@@ -1,0 +1,316 @@
+"""DecoupledPNLSSRegressor: the PNLSS model with its multivariate polynomial
+replaced by a few univariate branches, started by a CPD of the polynomial's
+Jacobian tensor and fitted by Levenberg-Marquardt."""
+from numbers import Integral, Real
+
+import numpy as np
+from joblib import Parallel, delayed
+from sklearn.base import _fit_context, clone
+from sklearn.utils import check_random_state
+from sklearn.utils._param_validation import Interval, StrOptions
+
+from ..decoupling.start import decoupled_start
+from ..statespace.model_base import DivergenceError
+from ..utils.handover import attach_stage, detach_stage
+from ..utils.validation import check_period
+from ._statespace import StateSpaceRegressorBase
+from .bla import BLAEstimator
+from .pnlss import PNLSSRegressor
+
+__all__ = ["DecoupledPNLSSRegressor"]
+
+
+class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
+    """Decoupled polynomial nonlinear state-space model.
+
+    ``x(t+1) = A x + B u + W_x g(V^T [x; u])``,
+    ``y = C x + D u + W_y g(V^T [x; u])`` (output branches optional), where
+    each ``g_l`` is a univariate polynomial of degree ``degree``. It needs
+    ``(2 n + d + 1) r`` nonlinear parameters (state equation) where the full
+    polynomial needs them combinatorially many.
+
+    Fitting (Fakhrizadeh Esfahani et al., MSSP 2018): a full PNLSS model is
+    fitted first (``start_model``, or the one handed over in a Pipeline); the
+    Jacobian of its nonlinear part at ``n_points`` points drawn from its
+    simulated states and inputs is stacked into a tensor, whose rank-r
+    canonical polyadic decomposition gives ``W`` and ``V``; a polynomial fit
+    of the branch derivatives, integrated, gives ``g``. If that start
+    simulates unstably, it starts from ``W = 0``. All parameters are then
+    fitted by Levenberg-Marquardt on the simulation error with the exact
+    Jacobian (same objective, weighting, transient handling and divergence
+    guard as :class:`PNLSSRegressor`). ``n_init`` starts from different
+    random points run in parallel; the best is kept, by validation error when
+    validation signals are given to :meth:`fit`, else by training cost.
+
+    Parameters
+    ----------
+    n_states : int, default=3
+        Model order.
+    n_branches : int, default=3
+        Number of univariate branches ``r``.
+    degree : int, default=10
+        Degree ``d`` of each branch (terms of degrees 1 to ``d``; the linear
+        term is redundant with A and B and kept only to count parameters as
+        the paper does).
+    period : int or None, default=None
+        Samples per period (see :class:`PNLSSRegressor`).
+    n_init : int, default=5
+        Starts from different random sampling points (and CPD starts).
+    n_points : int, default=500
+        Points at which the Jacobian of the full polynomial is sampled.
+    output_branches : bool, default=False
+        Let the branches enter the output equation too (``W_y`` fitted); the
+        default start then carries an output polynomial as well.
+    start_model : PNLSSRegressor or None, default=None
+        The full model to start from (cloned and fitted); None uses
+        ``PNLSSRegressor(n_states, degrees=(2, 3), variables="states_inputs",
+        period=period)`` (the paper's start). In a Pipeline after a fitted
+        ``PNLSSRegressor`` stage, that stage is the start instead.
+    average_periods, weighting, band, max_iter, tol, n_transient
+        As in :class:`PNLSSRegressor`, for the decoupled model's fit.
+    n_jobs : int or None, default=None
+        Parallel starts (joblib threads: the compiled kernels release the
+        GIL). None means 1.
+    verbose : int, default=0
+        Print the iterations of each start.
+    random_state : int, RandomState instance or None, default=None
+        Seeds the sampling points and CPD starts of the ``n_init`` starts.
+
+    Attributes
+    ----------
+    A_, B_, C_, D_ : ndarray
+        Linear part in the user's units.
+    V_ : ndarray of shape (n_states + n_inputs, n_branches)
+        Branch directions over ``[x; u]`` in the user's units.
+    W_x_ : ndarray of shape (n_states, n_branches)
+    W_y_ : ndarray of shape (n_outputs, n_branches)
+        Zero without output branches.
+    coef_ : ndarray of shape (n_branches, degree)
+        ``coef_[l, k]`` multiplies ``z_l ** (k + 1)`` in ``g_l``.
+    z_range_ : ndarray of shape (n_branches, 2)
+        Range of each branch input ``z_l = V_[:, l] @ [x; u]`` on the
+        training data (where the branches are trustworthy).
+    start_model_ : PNLSSRegressor
+        The fitted full model the decoupled model started from.
+    cpd_errors_ : ndarray of shape (n_init,)
+        Relative CPD error of each start.
+    init_scores_ : ndarray of shape (n_init,)
+        Validation rms error in dB (or training cost in dB) of each start
+        after fitting; the lowest was kept (``best_init_``).
+    n_params_, n_nonlinear_params_, n_iter_, best_iteration_ : int
+    cost_history_, validation_history_ : ndarray
+        Of the kept start (see :class:`PNLSSRegressor`).
+    n_features_in_, n_outputs_ : int
+
+    Examples
+    --------
+    >>> from sklearn_pnlss import DecoupledPNLSSRegressor
+    >>> DecoupledPNLSSRegressor(n_branches=3, degree=10).get_params()["n_init"]
+    5
+    """
+
+    _parameter_constraints = {
+        "n_states": [Interval(Integral, 1, None, closed="left")],
+        "n_branches": [Interval(Integral, 1, None, closed="left")],
+        "degree": [Interval(Integral, 2, None, closed="left")],
+        "period": [Interval(Integral, 2, None, closed="left"), None],
+        "n_init": [Interval(Integral, 1, None, closed="left")],
+        "n_points": [Interval(Integral, 2, None, closed="left")],
+        "output_branches": ["boolean"],
+        "start_model": [None, PNLSSRegressor],
+        "average_periods": ["boolean"],
+        "weighting": [None, StrOptions({"band", "noise"})],
+        "band": [tuple, list, None],
+        "max_iter": [Interval(Integral, 0, None, closed="left")],
+        "tol": [Interval(Real, 0, None, closed="left")],
+        "n_transient": [Interval(Integral, 0, None, closed="left"), StrOptions({"auto"})],
+        "n_jobs": [Integral, None],
+        "verbose": ["verbose"],
+        "random_state": ["random_state"],
+    }
+
+    def __init__(
+        self,
+        n_states=3,
+        *,
+        n_branches=3,
+        degree=10,
+        period=None,
+        n_init=5,
+        n_points=500,
+        output_branches=False,
+        start_model=None,
+        average_periods=True,
+        weighting=None,
+        band=None,
+        max_iter=100,
+        tol=1e-8,
+        n_transient="auto",
+        n_jobs=None,
+        verbose=0,
+        random_state=None,
+    ):
+        self.n_states = n_states
+        self.n_branches = n_branches
+        self.degree = degree
+        self.period = period
+        self.n_init = n_init
+        self.n_points = n_points
+        self.output_branches = output_branches
+        self.start_model = start_model
+        self.average_periods = average_periods
+        self.weighting = weighting
+        self.band = band
+        self.max_iter = max_iter
+        self.tol = tol
+        self.n_transient = n_transient
+        self.n_jobs = n_jobs
+        self.verbose = verbose
+        self.random_state = random_state
+
+    @_fit_context(prefer_skip_nested_validation=False)
+    def fit(self, X, y, *, X_val=None, y_val=None, time_weight=None):
+        """Fit (or take) the full start model, then the decoupled model.
+
+        Parameters
+        ----------
+        X, y : signals (see :class:`PNLSSRegressor`)
+        X_val, y_val : signals or None, default=None
+            Validation signals: pick the best iterate of each start and the
+            best start (the paper's practice). Also passed to the start
+            model's fit when it is fitted here.
+        time_weight : signals or None, default=None
+            As in :meth:`PNLSSRegressor.fit`.
+
+        Returns
+        -------
+        self
+        """
+        X, stage = detach_stage(X)
+        X_list, y_list = self._validate_fit_data(X, y)
+        period = check_period(self.period)
+        weights = self._check_time_weight(time_weight, y_list)
+        val = self._check_validation(X_val, y_val)
+        start = self._start_model(stage, X_list, y_list, X_val, y_val, time_weight)
+        self.start_model_ = start
+        self._u_scale, self._y_scale, self._x_scale = start._u_scale, start._y_scale, start._x_scale
+        full = start._model
+        trajectory = self._trajectory(full, X_list)
+        objectives = self._objectives(X_list, y_list, period, weights, full.A)
+        seeds = check_random_state(self.random_state).randint(np.iinfo(np.int32).max, size=self.n_init)
+        runs = Parallel(n_jobs=self.n_jobs, prefer="threads")(
+            delayed(self._one_start)(full, trajectory, int(seed), objectives, val) for seed in seeds
+        )
+        fits, cpd_errors = zip(*runs)
+        scores = np.array([
+            f.validation_error if val is not None else 10 * np.log10(f.cost_history[-1]) for f in fits
+        ])
+        self.best_init_ = int(np.argmin(scores))
+        self.init_scores_ = scores
+        self.cpd_errors_ = np.array(cpd_errors)
+        self._set_fit_result(fits[self.best_init_])
+        self._export_user_units(trajectory)
+        self.n_params_ = self._model.n_params
+        self.n_nonlinear_params_ = self._model.n_nonlinear_params
+        return self
+
+    def _start_model(self, stage, X_list, y_list, X_val, y_val, time_weight):
+        """The fitted full PNLSS model the decoupled one starts from."""
+        if isinstance(stage, PNLSSRegressor):
+            start = stage
+        else:
+            if stage is not None and not isinstance(stage, BLAEstimator):
+                raise TypeError(
+                    "DecoupledPNLSSRegressor starts from a PNLSSRegressor (or BLAEstimator) stage; "
+                    f"the previous Pipeline stage is a {type(stage).__name__}."
+                )
+            if self.start_model is not None:
+                start = clone(self.start_model)
+            else:
+                start = PNLSSRegressor(
+                    self.n_states, degrees=(2, 3), variables="states_inputs",
+                    equations="both" if self.output_branches else "state", period=self.period,
+                )
+            X_fit = X_list if stage is None else attach_stage(X_list, stage)
+            start.fit(X_fit, y_list, X_val=X_val, y_val=y_val, time_weight=time_weight)
+        if start.n_states != self.n_states:
+            raise ValueError(
+                f"The start model has n_states={start.n_states} but n_states={self.n_states}; make them equal."
+            )
+        return start
+
+    def _trajectory(self, full, X_list):
+        """[x; u] along the full model's simulation of the training inputs
+        (normalised units): where the decoupled model must be accurate."""
+        parts = []
+        for U in X_list:
+            Un = U / self._u_scale
+            x0 = full.steady_state_start(Un[: self.period]) if self._signal_is_periodic(U.shape[0]) else None
+            parts.append(np.hstack([full.simulate_states(Un, x0), Un]))
+        return np.vstack(parts)
+
+    def _one_start(self, full, trajectory, seed, objectives, val):
+        model, cpd_error = decoupled_start(
+            full, trajectory, self.n_branches, self.degree, n_points=self.n_points, random_state=seed,
+        )
+        model = model.with_theta(model.theta)  # a private copy
+        model.output_branches = bool(self.output_branches)
+        if not self.output_branches:
+            model.Wy[:] = 0.0
+        try:
+            return self._optimise(model, objectives, val), cpd_error
+        except DivergenceError:
+            # The paper's step 7: an unstable start is replaced by W = 0
+            # (the linear model), from which LM grows the branches.
+            model.Wx[:] = 0.0
+            model.Wy[:] = 0.0
+            return self._optimise(model, objectives, val), cpd_error
+
+    def _n_null_directions(self, model):
+        """n^2 for the state basis, and per branch: the scale shared by W
+        and g, the scale shared by V and g, and the linear term of g that A
+        and B absorb."""
+        return model.n_states**2 + 3 * model.n_branches
+
+    def _export_user_units(self, trajectory):
+        mdl = self._model
+        T, Ti = np.diag(self._x_scale), np.diag(1 / self._x_scale)
+        Su_i, Sy = np.diag(1 / self._u_scale), np.diag(self._y_scale)
+        self.A_ = T @ mdl.A @ Ti
+        self.B_ = T @ mdl.B @ Su_i
+        self.C_ = Sy @ mdl.C @ Ti
+        self.D_ = Sy @ mdl.D @ Su_i
+        # z = V_n^T s_n = V_n^T S^-1 s, so the branches keep their
+        # coefficients and V absorbs the scaling.
+        S_i = 1 / np.concatenate([self._x_scale, self._u_scale])
+        self.V_ = S_i[:, None] * mdl.V
+        self.W_x_ = T @ mdl.Wx
+        self.W_y_ = Sy @ mdl.Wy
+        self.coef_ = mdl.G.copy()
+        z = trajectory @ mdl.V
+        self.z_range_ = np.column_stack([z.min(axis=0), z.max(axis=0)])
+
+    def branch_values(self, z=None, n_points=200):
+        """Each branch ``g_l`` evaluated on a grid (for plots and
+        interpretation).
+
+        Parameters
+        ----------
+        z : array-like of shape (n_z,) or (n_z, n_branches) or None
+            Branch inputs; None: ``n_points`` values spanning each branch's
+            training range ``z_range_``.
+        n_points : int, default=200
+
+        Returns
+        -------
+        z : ndarray of shape (n_z, n_branches)
+        g : ndarray of shape (n_z, n_branches)
+        """
+        if z is None:
+            lo, hi = self.z_range_[:, 0], self.z_range_[:, 1]
+            z = lo + np.linspace(0.0, 1.0, n_points)[:, None] * (hi - lo)
+        z = np.asarray(z, dtype=float)
+        if z.ndim == 1:
+            z = np.repeat(z[:, None], self.coef_.shape[0], axis=1)
+        powers = z[:, :, None] ** np.arange(1, self.coef_.shape[1] + 1)
+        return z, np.einsum("nlk,lk->nl", powers, self.coef_)
