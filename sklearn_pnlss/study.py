@@ -74,7 +74,7 @@ def _fit_models(names, data, verbose):
         "decoupled": lambda: DecoupledPNLSSRegressor(3, n_branches=3, degree=10, period=P, n_init=5, n_jobs=-1,
                                                      random_state=0, verbose=verbose),
     }
-    fitted, times = {}, {}
+    fitted = {}
     for name in [n for n in MODELS if n in names or (n == "pnlss_si" and "decoupled" in names)]:
         model = make[name]()
         t0 = time.perf_counter()

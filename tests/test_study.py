@@ -7,10 +7,13 @@ from sklearn_pnlss.study import format_table, main, run_study
 
 
 def test_study_writes_results_and_figures(tmp_path):
-    summary = run_study(output_dir=tmp_path, models=("bla",), progress=False)
-    row = summary["results"][0]
+    summary = run_study(output_dir=tmp_path, models=("bla", "pnlss"), progress=False)
+    row, pnlss = summary["results"]
     assert row["model"] == "bla" and row["n_params"] == 16
-    assert row["multisine_db"] < -75 and row["sweep_db"] < -74
+    # Trained at 55 N (the seed paper's level), tested at 50 N: the BLA,
+    # an amplitude-dependent linearisation, is about 1 dB off its 50 N level.
+    assert row["multisine_db"] < -74 and row["sweep_db"] < -74
+    assert pnlss["n_params"] == 64 and pnlss["multisine_db"] < -90 and pnlss["sweep_db"] < -96
     saved = json.loads((tmp_path / "results.json").read_text())
     assert saved["results"][0]["multisine_db"] == row["multisine_db"]
     assert (tmp_path / "results.csv").read_text().startswith("model,")
