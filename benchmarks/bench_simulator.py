@@ -56,8 +56,7 @@ def _relative_rms(y_true, y_pred):
 
 
 def run(data_dir, repeat):
-    from sklearn_pnlss.datasets import (bouc_wen_oscillator, load_bouc_wen_official,
-                                        make_bouc_wen, simulate_bouc_wen)
+    from sklearn_pnlss.datasets import bouc_wen_oscillator, load_bouc_wen_official, make_bouc_wen, simulate_bouc_wen
     from sklearn_pnlss.signals import bouc_wen_sweep, multisine
 
     results = header()

@@ -115,3 +115,14 @@ def test_paper_finding_decoupled_beats_full_with_fewer_parameters(bouc_wen_fits)
         assert -dec.score(X, y) < -full.score(X, y)
     assert -dec.score(official.X_test_multisine, official.y_test_multisine) < -95.5
     assert -dec.score(official.X_test_sweep, official.y_test_sweep) < -99.0
+
+
+def test_rank_scan_of_the_full_model_finds_one_branch():
+    from sklearn_pnlss.model_selection import cpd_rank_scan
+
+    X, y = _data()
+    full = PNLSSRegressor(2, degrees=(2, 3), period=N, max_iter=40).fit(X, y)
+    scan = cpd_rank_scan(full, X, ranks=[1, 2, 3], n_points=200, n_init=2, random_state=0)
+    assert list(scan.ranks) == [1, 2, 3]
+    assert scan.errors[0] < 0.05  # the truth has one branch
+    assert np.all(np.diff(scan.errors) <= 1e-6)

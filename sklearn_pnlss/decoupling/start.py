@@ -17,7 +17,7 @@ from .branches import fit_branches
 from .cpd import decompose_jacobian
 from .jacobian_tensor import polynomial_jacobian, sample_points
 
-__all__ = ["decoupled_start"]
+__all__ = ["decoupled_start", "nonlinear_jacobian_tensor", "states_inputs_trajectory"]
 
 
 def _split_linear(M, exponents, n):
@@ -37,6 +37,35 @@ def _split_linear(M, exponents, n):
             lin_u[:, v - n] += M[:, j]
     keep = degree >= 2
     return lin_x, lin_u, M[:, keep], exponents[keep]
+
+
+def _jacobian_tensor(E, exE, F, exF, points):
+    J = polynomial_jacobian(E, exE, points)
+    if F.shape[1] > 0:
+        J = np.concatenate([J, polynomial_jacobian(F, exF, points)], axis=0)
+    return J
+
+
+def nonlinear_jacobian_tensor(pnlss_model, points):
+    """Jacobian tensor (n [+ p], n + m, N) of the nonlinear part
+    ``[E zeta(s); F eta(s)]`` of a PNLSS model (degree >= 2 terms) at the
+    points ``s = [x; u]``: what the CPD decomposes."""
+    n = pnlss_model.A.shape[0]
+    *_, E, exE = _split_linear(np.asarray(pnlss_model.E, dtype=np.float64), pnlss_model.exE, n)
+    *_, F, exF = _split_linear(np.asarray(pnlss_model.F, dtype=np.float64), pnlss_model.exF, n)
+    return _jacobian_tensor(E, exE, F, exF, np.asarray(points, dtype=np.float64))
+
+
+def states_inputs_trajectory(model, U_list, period=None):
+    """``[x; u]`` along the simulation of each input (periodic steady state
+    for signals of whole periods, else from rest), stacked: the region
+    where a decoupled model must reproduce the full one."""
+    parts = []
+    for U in U_list:
+        periodic = period is not None and U.shape[0] % period == 0
+        x0 = model.steady_state_start(U[:period]) if periodic else None
+        parts.append(np.hstack([model.simulate_states(U, x0), U]))
+    return np.vstack(parts)
 
 
 def decoupled_start(pnlss_model, states_inputs, n_branches, degree, *, n_points=500, random_state=None):
@@ -105,9 +134,7 @@ def decoupled_start(pnlss_model, states_inputs, n_branches, degree, *, n_points=
     output_branches = pnlss_model.F.shape[1] > 0
 
     points = sample_points(states_inputs, n_points=n_points, random_state=rng)
-    J = polynomial_jacobian(E, exE, points)
-    if output_branches:
-        J = np.concatenate([J, polynomial_jacobian(F, exF, points)], axis=0)
+    J = _jacobian_tensor(E, exE, F, exF, points)
     W, V, H, cpd_error = decompose_jacobian(J, n_branches, random_state=rng)
     coef = fit_branches(V, H, points, degree)
 

@@ -9,7 +9,7 @@ from sklearn.base import _fit_context, clone
 from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import Interval, StrOptions
 
-from ..decoupling.start import decoupled_start
+from ..decoupling.start import decoupled_start, states_inputs_trajectory
 from ..statespace.model_base import DivergenceError
 from ..utils.handover import attach_stage, detach_stage
 from ..utils.validation import check_period
@@ -195,7 +195,7 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         self.start_model_ = start
         self._u_scale, self._y_scale, self._x_scale = start._u_scale, start._y_scale, start._x_scale
         full = start._model
-        trajectory = self._trajectory(full, X_list)
+        trajectory = states_inputs_trajectory(full, [U / self._u_scale for U in X_list], period)
         objectives = self._objectives(X_list, y_list, period, weights, full.A)
         seeds = check_random_state(self.random_state).randint(np.iinfo(np.int32).max, size=self.n_init)
         runs = Parallel(n_jobs=self.n_jobs, prefer="threads")(
@@ -238,16 +238,6 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
                 f"The start model has n_states={start.n_states} but n_states={self.n_states}; make them equal."
             )
         return start
-
-    def _trajectory(self, full, X_list):
-        """[x; u] along the full model's simulation of the training inputs
-        (normalised units): where the decoupled model must be accurate."""
-        parts = []
-        for U in X_list:
-            Un = U / self._u_scale
-            x0 = full.steady_state_start(Un[: self.period]) if self._signal_is_periodic(U.shape[0]) else None
-            parts.append(np.hstack([full.simulate_states(Un, x0), Un]))
-        return np.vstack(parts)
 
     def _one_start(self, full, trajectory, seed, objectives, val):
         model, cpd_error = decoupled_start(
