@@ -18,6 +18,11 @@ The Jacobian of the simulated output comes from the sensitivity recursion
 all parameters at once. As in :mod:`._pnlss_kernels`, the loops are written
 out (no ``@`` on small arrays, which would allocate at every sample) and the
 powers ``z ** k`` are built by repeated multiplication (no ``pow`` calls).
+
+The small inline helpers (``_affine`` ...) are defined here again rather than
+imported from :mod:`._pnlss_kernels`: numba's on-disk cache checks only the
+source file of the cached function, so a helper changed in another module
+would leave a stale compiled kernel behind.
 """
 import numba
 import numpy as np
