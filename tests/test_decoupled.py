@@ -126,3 +126,27 @@ def test_rank_scan_of_the_full_model_finds_one_branch():
     assert list(scan.ranks) == [1, 2, 3]
     assert scan.errors[0] < 0.05  # the truth has one branch
     assert np.all(np.diff(scan.errors) <= 1e-6)
+
+
+def test_grid_search_over_branches_and_degree_on_held_out_signals(tmp_path):
+    """The paper's selection on a small scale: a Pipeline whose cached full
+    PNLSS stage feeds every grid point, scored on held-out signals."""
+    from sklearn.model_selection import GridSearchCV
+    from sklearn.pipeline import Pipeline
+
+    from sklearn_pnlss.model_selection import held_out_signals, mean_rms_db_scorer
+
+    X, y = _data()
+    X_test, y_test = _data(n_realizations=1, seed=7)
+    Xa, ya, cv = held_out_signals(X, y, X_test, y_test)
+    pipe = Pipeline([("pnlss", PNLSSRegressor(2, degrees=(2, 3), period=N, max_iter=40)),
+                     ("dec", DecoupledPNLSSRegressor(2, period=N, n_init=2, max_iter=40, random_state=0))],
+                    memory=str(tmp_path))
+    search = GridSearchCV(pipe, {"dec__n_branches": [1, 2], "dec__degree": [2, 3]}, cv=cv,
+                          scoring=mean_rms_db_scorer, refit=False, n_jobs=-1)
+    search.fit(Xa, ya)
+    scores = dict(zip([(p["dec__n_branches"], p["dec__degree"]) for p in search.cv_results_["params"]],
+                      search.cv_results_["mean_test_score"]))
+    # The truth is one cubic branch: degree 2 cannot fit it, degree 3 can.
+    assert search.best_params_["dec__degree"] == 3
+    assert scores[(1, 3)] > scores[(1, 2)] + 20
