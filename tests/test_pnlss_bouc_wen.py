@@ -60,14 +60,16 @@ def test_states_degrees_3_5_7(official):
     """217 parameters: five realisations to fit and a sixth to keep the best
     iterate (on two realisations the model fits the training record ever
     better while its validation error rises after 30 iterations, and it
-    leaves its stable range on new inputs). Measured: -96.31 dB / -104.15 dB
-    (best iterate 45), about 1 minute. The published figure is -98.32 dB on
-    the multisine; that gap is still open."""
-    data = make_bouc_wen(n_realizations=6, n_periods=2, random_state=0)
+    leaves its stable range on new inputs). Trained at 55 N, as the seed
+    paper does, so the test multisine's peaks stay inside the training
+    range. Measured: -97.01 dB / -103.21 dB (best iterate 60), 1-4 minutes;
+    at 50 N -96.31 / -104.15 dB. The published figure is -98.32 dB on the
+    multisine; that gap is still open."""
+    data = make_bouc_wen(n_realizations=6, n_periods=2, rms=55.0, random_state=0)
     model = PNLSSRegressor(3, degrees=(3, 5, 7), variables="states", period=data.period, max_iter=200)
     model.fit(data.X_train[:5], data.y_train[:5],
               X_val=data.X_train[5:, data.period:], y_val=data.y_train[5:, data.period:])
     assert model.n_params_ == 217
     multisine, sweep = _errors(model, official)
-    assert multisine < -96.0
+    assert multisine < -96.5
     assert sweep < -103.0
