@@ -209,7 +209,9 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         self.init_scores_ = scores
         self.cpd_errors_ = np.array(cpd_errors)
         self._set_fit_result(fits[self.best_init_])
-        self._export_user_units(trajectory)
+        # The branch inputs' range along the fitted model's own simulation
+        # (after LM its state basis is no longer the start's).
+        self._export_user_units(states_inputs_trajectory(self._model, [U / self._u_scale for U in X_list], period))
         self.n_params_ = self._model.n_params
         self.n_nonlinear_params_ = self._model.n_nonlinear_params
         return self
