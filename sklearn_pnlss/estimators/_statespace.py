@@ -1,6 +1,6 @@
-"""What the nonlinear state-space regressors share: internal scaling, the
-weighted simulation-error objectives, Levenberg-Marquardt with validation,
-simulation for predict, and the Pipeline hand-over."""
+"""What the nonlinear state-space regressors share: the weighted
+simulation-error objectives on internally scaled signals, Levenberg-Marquardt
+with validation, and simulation for predict."""
 from dataclasses import dataclass
 
 import numpy as np
