@@ -2,8 +2,10 @@
 simulation-error objectives on internally scaled signals, Levenberg-Marquardt
 with validation, and simulation for predict."""
 from dataclasses import dataclass
+from numbers import Integral, Real
 
 import numpy as np
+from sklearn.utils._param_validation import Interval, StrOptions
 
 from ..frequency.noise import periodic_noise_variance
 from ..metrics import to_db
@@ -27,6 +29,20 @@ class LMFit:
     cost_history: np.ndarray
     validation_history: np.ndarray | None
     validation_error: float  # dB, best over the iterations; NaN without validation
+
+
+# Constraints of the fit parameters every subclass has (see the docstring).
+FIT_PARAMETER_CONSTRAINTS = {
+    "period": [Interval(Integral, 2, None, closed="left"), None],
+    "average_periods": ["boolean"],
+    "weighting": [None, StrOptions({"band", "noise"})],
+    "band": [tuple, list, None],
+    "max_iter": [Interval(Integral, 0, None, closed="left")],
+    "tol": [Interval(Real, 0, None, closed="left")],
+    "n_transient": [Interval(Integral, 0, None, closed="left"), StrOptions({"auto"})],
+    "verbose": ["verbose"],
+    "random_state": ["random_state"],
+}
 
 
 class StateSpaceRegressorBase(SignalRegressorBase):

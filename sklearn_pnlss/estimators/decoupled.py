@@ -1,19 +1,19 @@
 """DecoupledPNLSSRegressor: the PNLSS model with its multivariate polynomial
 replaced by a few univariate branches, started by a CPD of the polynomial's
 Jacobian tensor and fitted by Levenberg-Marquardt."""
-from numbers import Integral, Real
+from numbers import Integral
 
 import numpy as np
 from joblib import Parallel, delayed
 from sklearn.base import _fit_context, clone
 from sklearn.utils import check_random_state
-from sklearn.utils._param_validation import Interval, StrOptions
+from sklearn.utils._param_validation import Interval
 
 from ..decoupling.start import decoupled_start, states_inputs_trajectory
 from ..statespace.model_base import DivergenceError
 from ..utils.handover import attach_stage, detach_stage
 from ..utils.validation import check_period
-from ._statespace import StateSpaceRegressorBase
+from ._statespace import FIT_PARAMETER_CONSTRAINTS, StateSpaceRegressorBase
 from .bla import BLAEstimator
 from .pnlss import PNLSSRegressor
 
@@ -110,23 +110,15 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
     """
 
     _parameter_constraints = {
+        **FIT_PARAMETER_CONSTRAINTS,
         "n_states": [Interval(Integral, 1, None, closed="left")],
         "n_branches": [Interval(Integral, 1, None, closed="left")],
         "degree": [Interval(Integral, 2, None, closed="left")],
-        "period": [Interval(Integral, 2, None, closed="left"), None],
         "n_init": [Interval(Integral, 1, None, closed="left")],
         "n_points": [Interval(Integral, 2, None, closed="left")],
         "output_branches": ["boolean"],
         "start_model": [None, PNLSSRegressor],
-        "average_periods": ["boolean"],
-        "weighting": [None, StrOptions({"band", "noise"})],
-        "band": [tuple, list, None],
-        "max_iter": [Interval(Integral, 0, None, closed="left")],
-        "tol": [Interval(Real, 0, None, closed="left")],
-        "n_transient": [Interval(Integral, 0, None, closed="left"), StrOptions({"auto"})],
         "n_jobs": [Integral, None],
-        "verbose": ["verbose"],
-        "random_state": ["random_state"],
     }
 
     def __init__(

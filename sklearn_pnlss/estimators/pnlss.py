@@ -1,6 +1,6 @@
 """PNLSSRegressor: polynomial nonlinear state-space model fitted by
 Levenberg-Marquardt on the simulation error with an exact Jacobian."""
-from numbers import Integral, Real
+from numbers import Integral
 
 import numpy as np
 from sklearn.base import _fit_context, clone
@@ -11,7 +11,7 @@ from ..statespace.monomials import monomial_exponents
 from ..statespace.pnlss import DivergenceError, PNLSSModel
 from ..utils.handover import detach_stage
 from ..utils.validation import check_period
-from ._statespace import StateSpaceRegressorBase
+from ._statespace import FIT_PARAMETER_CONSTRAINTS, StateSpaceRegressorBase
 from .bla import BLAEstimator
 
 __all__ = ["PNLSSRegressor"]
@@ -126,20 +126,12 @@ class PNLSSRegressor(StateSpaceRegressorBase):
     """
 
     _parameter_constraints = {
+        **FIT_PARAMETER_CONSTRAINTS,
         "n_states": [Interval(Integral, 1, None, closed="left")],
         "degrees": ["array-like"],
         "variables": [StrOptions({"states_inputs", "states"})],
         "equations": [StrOptions({"state", "output", "both"})],
-        "period": [Interval(Integral, 2, None, closed="left"), None],
-        "average_periods": ["boolean"],
-        "weighting": [None, StrOptions({"band", "noise"})],
-        "band": [tuple, list, None],
-        "max_iter": [Interval(Integral, 0, None, closed="left")],
-        "tol": [Interval(Real, 0, None, closed="left")],
-        "n_transient": [Interval(Integral, 0, None, closed="left"), StrOptions({"auto"})],
         "linear_model": [None, BLAEstimator],
-        "verbose": ["verbose"],
-        "random_state": ["random_state"],
     }
 
     def __init__(
