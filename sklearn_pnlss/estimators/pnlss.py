@@ -110,7 +110,7 @@ class PNLSSRegressor(StateSpaceRegressorBase):
     cost_history_ : ndarray
         Weighted cost (sum of squared normalised errors) after each
         iteration of the last stage, its start first.
-    validation_history_ : ndarray of shape (n_iter_ + 1,)
+    validation_history_ : ndarray of shape (``n_iter_ + 1``,)
         rms error in dB on the validation signals after each iteration
         (only when validation signals were given to :meth:`fit`).
     best_iteration_ : int
