@@ -217,7 +217,7 @@ class StateSpaceRegressorBase(SignalRegressorBase):
             Yn = self._model.simulate_signal(Un, self.period if periodic else None)
         except DivergenceError as exc:
             raise ValueError(
-                f"{type(self).__name__}.predict: {exc}; the input drives the model far "
+                f"{type(self).__name__}.predict: {exc}; the input X drives the model far "
                 "outside the range it was fitted on (larger amplitude or other "
                 "frequencies than the training data)."
             ) from None

@@ -232,8 +232,15 @@ class BLAEstimator(SignalRegressorBase):
         n_lines, p, m = self.frf_.shape
         if n_lines * m < 2 * self.n_states + 1:
             raise ValueError(
-                f"{n_lines} excited line(s) cannot determine a model with "
+                f"{n_lines} excited line(s) in X cannot determine a model with "
                 f"n_states={self.n_states}; use longer signals or a lower n_states."
+            )
+        level = np.sqrt(np.mean(np.abs(self.frf_) ** 2))
+        if not (np.isfinite(level) and level > 0):
+            raise ValueError(
+                "y does not respond to X at the excited lines (the BLA is zero): a zero or "
+                "constant output holds no dynamics to identify; check that y is the "
+                "output measured with input X."
             )
         q = self.n_block_rows or max(self.n_states + 1, 2 * self.n_states)
         q = min(q, max(self.n_states + 1, (n_lines * m - self.n_states) // m))

@@ -187,7 +187,7 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         self.start_model_ = start
         self._u_scale, self._y_scale, self._x_scale = start._u_scale, start._y_scale, start._x_scale
         full = start._model
-        trajectory = states_inputs_trajectory(full, [U / self._u_scale for U in X_list], period)
+        trajectory = self._trajectory(full, X_list, period, "start model")
         objectives = self._objectives(X_list, y_list, period, weights, full.A)
         seeds = check_random_state(self.random_state).randint(np.iinfo(np.int32).max, size=self.n_init)
         runs = Parallel(n_jobs=self.n_jobs, prefer="threads")(
@@ -203,10 +203,25 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         self._set_fit_result(fits[self.best_init_])
         # The branch inputs' range along the fitted model's own simulation
         # (after LM its state basis is no longer the start's).
-        self._export_user_units(states_inputs_trajectory(self._model, [U / self._u_scale for U in X_list], period))
+        self._export_user_units(self._trajectory(self._model, X_list, period, "fitted decoupled model"))
         self.n_params_ = self._model.n_params
         self.n_nonlinear_params_ = self._model.n_nonlinear_params
         return self
+
+    def _trajectory(self, model, X_list, period, what):
+        """``[x; u]`` along the model's simulation of the training inputs (in
+        periodic steady state, or from rest when the steady-state iteration
+        diverges)."""
+        U_list = [U / self._u_scale for U in X_list]
+        for per in dict.fromkeys((period, None)):
+            try:
+                return states_inputs_trajectory(model, U_list, per)
+            except DivergenceError:
+                continue
+        raise ValueError(
+            f"The {what} diverges when simulated on the training signals X; lower "
+            "max_iter, pass validation signals (X_val, y_val), or check the data."
+        )
 
     def _start_model(self, stage, X_list, y_list, X_val, y_val, time_weight):
         """The fitted full PNLSS model the decoupled one starts from."""

@@ -102,11 +102,14 @@ def periodic_bla(U_periods, Y_periods, lines=None):
         lines = excited_lines(U_mean)
     lines = np.asarray(lines, dtype=int)
     if lines.size == 0:
-        raise ValueError("No excited line found in the input spectrum; is the input a multisine?")
+        raise ValueError(
+            "No excited line found in the input spectrum of X (a constant or zero "
+            "input excites nothing); is the input a multisine?"
+        )
     if R % m:
         raise ValueError(
-            f"With {m} inputs, the number of realisations must be a multiple of "
-            f"{m} (one block of {m} experiments per FRF); got {R}."
+            f"With {m} inputs, the number of realisations (signals in X) must be a "
+            f"multiple of {m} (one block of {m} experiments per FRF); got {R}."
         )
     n_blocks = R // m
     n_per = np.array([u.shape[0] for u in U_periods])
@@ -116,7 +119,14 @@ def periodic_bla(U_periods, Y_periods, lines=None):
     for b in range(n_blocks):
         sel = slice(b * m, (b + 1) * m)
         Ub = U_mean[sel][:, lines]
-        frf_blocks[b] = _frf_of_block(Ub, Y_mean[sel][:, lines])
+        try:
+            frf_blocks[b] = _frf_of_block(Ub, Y_mean[sel][:, lines])
+        except np.linalg.LinAlgError:
+            raise ValueError(
+                f"The input X of realisation(s) {list(range(b * m, (b + 1) * m))} has no power (or, "
+                "with several inputs, no independent excitation) at some excited line; "
+                "pass lines= explicitly or use random-phase multisines as input."
+            ) from None
         P = n_per[sel].min()
         if P >= 2:
             # Noise on G: the output's period-to-period spread mapped through

@@ -47,21 +47,29 @@ def signal_layout(X):
         return SignalLayout("list")
     if hasattr(X, "toarray") or hasattr(X, "tocsr"):
         return SignalLayout("sparse")
-    ndim = np.asarray(X).ndim
+    try:
+        ndim = np.asarray(X).ndim
+    except ValueError:  # nested lists of unequal lengths
+        return SignalLayout("ragged")
     return SignalLayout({3: "3d", 2: "2d", 1: "1d"}.get(ndim, "invalid"))
 
 
 def _finite_2d(signal, name, index, min_samples):
     """One signal as a finite float64 2-D array (samples, channels)."""
     where = name if index is None else f"{name}[{index}]"
-    arr = check_array(
-        signal,
-        ensure_2d=False,
-        dtype=np.float64,
-        ensure_all_finite=False,
-        input_name=where,
-        ensure_min_samples=1,
-    )
+    try:
+        arr = check_array(
+            signal,
+            ensure_2d=False,
+            dtype=np.float64,
+            ensure_all_finite=False,
+            input_name=where,
+            ensure_min_samples=1,
+        )
+    except (ValueError, TypeError) as exc:
+        # scikit-learn's messages ("Found array with 0 sample(s)", "could not
+        # convert string to float") do not say which argument is wrong.
+        raise (ValueError if isinstance(exc, ValueError) else TypeError)(f"{where}: {exc}") from exc
     if arr.ndim == 1:
         arr = arr[:, None]
     if arr.ndim != 2:
@@ -120,6 +128,11 @@ def as_signal_list(X, *, name="X", min_samples=2):
         signals = [_finite_2d(s, name, i, min_samples) for i, s in enumerate(arr)]
     elif layout.kind in ("2d", "1d"):
         signals = [_finite_2d(X, name, None, min_samples)]
+    elif layout.kind == "ragged":
+        raise ValueError(
+            f"{name} is a nested list of unequal lengths; pass signals of unequal "
+            "lengths as a list of numpy arrays, one per signal."
+        )
     else:
         raise ValueError(
             f"{name} must be a 3-D array (n_signals, n_samples, n_channels), a "
@@ -169,10 +182,15 @@ def validate_signals(estimator, X, y=None, *, reset=True, min_samples=2):
     if layout.kind == "2d":
         # A single 2-D signal is a plain sklearn X: let sklearn handle
         # feature names and the n_features_in_ bookkeeping.
-        validate_data(
-            estimator, X, reset=reset, ensure_all_finite=False, dtype=None,
-            ensure_min_samples=1, skip_check_array=False,
-        )
+        try:
+            validate_data(
+                estimator, X, reset=reset, ensure_all_finite=False, dtype=None,
+                ensure_min_samples=1, skip_check_array=False,
+            )
+        except (ValueError, TypeError) as exc:
+            if str(exc).startswith("X "):
+                raise
+            raise (ValueError if isinstance(exc, ValueError) else TypeError)(f"X: {exc}") from exc
     X_list, layout = as_signal_list(X, name="X", min_samples=min_samples)
     if layout.kind != "2d":
         _check_n_features(estimator, X_list[0].shape[1], reset, layout)
