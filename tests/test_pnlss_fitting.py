@@ -4,12 +4,13 @@ multiple inputs and outputs."""
 import numpy as np
 import pytest
 
-from sklearn_pnlss import PNLSSRegressor
+from sklearn_pnlss import BLAEstimator, PNLSSRegressor
 from sklearn_pnlss.signals import multisine
 from sklearn_pnlss.statespace.levenberg_marquardt import lm_step_basis
 from sklearn_pnlss.statespace.monomials import monomial_exponents
 from sklearn_pnlss.statespace.objective import SimulationError, weigh
 from sklearn_pnlss.statespace.pnlss import PNLSSModel, Segment
+from sklearn_pnlss.utils.handover import attach_stage
 
 N = 256
 
@@ -160,3 +161,39 @@ def test_two_inputs_two_outputs():
     assert -model.linear_model_.score(X_val, y_val) > 20 * np.log10(y_val.std()) - 30
     assert -model.score(X_val, y_val) < 20 * np.log10(y_val.std()) - 60
     assert model.n_nonlinear_params_ == 3 * len(monomial_exponents(5, (2, 3)))
+
+
+def test_divergent_trial_steps_are_rejected_never_returned():
+    """A residual that 'diverges' (None) beyond a wall: LM raises lambda
+    until its steps stay inside and never returns a point beyond it."""
+    from sklearn_pnlss.statespace.levenberg_marquardt import levenberg_marquardt
+
+    target = np.array([3.0, -2.0])  # the unconstrained optimum lies beyond the wall at |theta| = 1.5
+    visited = []
+
+    def residual(theta):
+        visited.append(theta.copy())
+        if np.any(np.abs(theta) > 1.5):
+            return None
+        return np.concatenate([theta - target, 0.1 * theta**2])
+
+    def normal_equations(theta):
+        J = np.vstack([np.eye(2), np.diag(0.2 * theta)])
+        e = residual(theta)
+        return J.T @ J, J.T @ e
+
+    result = levenberg_marquardt(residual, normal_equations, np.zeros(2), max_iter=50)
+    assert np.all(np.abs(result.theta) <= 1.5) and np.all(np.isfinite(result.theta))
+    assert any(np.any(np.abs(v) > 1.5) for v in visited)  # divergent trials did happen
+    costs = [h[1] for h in result.history]
+    assert np.all(np.diff(costs) <= 0)  # only improving steps accepted
+
+
+def test_a_start_that_diverges_is_a_clear_error():
+    """An unstable linear model handed over as the start: fit says so."""
+    truth = _truth(np.random.default_rng(3))
+    X, y = _data(truth)
+    bla = BLAEstimator(3, period=N).fit(X, y)
+    bla.A_ = 1.5 * np.eye(3)  # unstable
+    with pytest.raises(ValueError, match="linear start diverges"):
+        PNLSSRegressor(3, period=N, max_iter=3, n_transient=0).fit(attach_stage(X, bla), y)

@@ -6,7 +6,7 @@ import numpy as np
 from sklearn.base import _fit_context, clone
 from sklearn.utils._param_validation import Interval, StrOptions
 
-from ..statespace.linear import simulate_linear_signal
+from ..statespace.linear import is_stable, simulate_linear_signal
 from ..statespace.monomials import monomial_exponents
 from ..statespace.pnlss import DivergenceError, PNLSSModel
 from ..utils.handover import detach_stage
@@ -239,7 +239,15 @@ class PNLSSRegressor(StateSpaceRegressorBase):
             raise ValueError(
                 f"The linear model has n_states={linear.n_states} but n_states={self.n_states}; make them equal."
             )
-        return linear if stage is not None else linear.fit(X_list, y_list)
+        if stage is None:
+            linear.fit(X_list, y_list)
+        if not is_stable(linear.A_):
+            rho = np.max(np.abs(np.linalg.eigvals(linear.A_)))
+            raise ValueError(
+                f"The linear start diverges: its A has spectral radius {rho:.4g} >= 1. Give a "
+                "stable linear model (BLAEstimator stabilises the ones it fits)."
+            )
+        return linear
 
     def _normalised_start(self, X_list, y_list, period):
         """The linear start with unit-rms inputs, outputs and states, E = F = 0.
