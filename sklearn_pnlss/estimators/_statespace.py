@@ -223,6 +223,19 @@ class StateSpaceRegressorBase(SignalRegressorBase):
             ) from None
         return Yn * self._y_scale
 
+    def _export_linear_user_units(self):
+        """``A_, B_, C_, D_`` in the user's units from the normalised model;
+        returns the state and output scalings ``T``, ``Sy`` (diagonal) for
+        the subclass's nonlinear blocks."""
+        mdl = self._model
+        T, Ti = np.diag(self._x_scale), np.diag(1 / self._x_scale)
+        Su_i, Sy = np.diag(1 / self._u_scale), np.diag(self._y_scale)
+        self.A_ = T @ mdl.A @ Ti
+        self.B_ = T @ mdl.B @ Su_i
+        self.C_ = Sy @ mdl.C @ Ti
+        self.D_ = Sy @ mdl.D @ Su_i
+        return T, Sy
+
     def _n_null_directions(self, model):
         """Parameter directions that leave the output unchanged (dropped
         from each LM step): the n^2 of the state basis."""

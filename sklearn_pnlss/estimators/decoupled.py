@@ -273,12 +273,7 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
 
     def _export_user_units(self, trajectory):
         mdl = self._model
-        T, Ti = np.diag(self._x_scale), np.diag(1 / self._x_scale)
-        Su_i, Sy = np.diag(1 / self._u_scale), np.diag(self._y_scale)
-        self.A_ = T @ mdl.A @ Ti
-        self.B_ = T @ mdl.B @ Su_i
-        self.C_ = Sy @ mdl.C @ Ti
-        self.D_ = Sy @ mdl.D @ Su_i
+        T, Sy = self._export_linear_user_units()
         # z = V_n^T s_n = V_n^T S^-1 s, so the branches keep their
         # coefficients and V absorbs the scaling.
         S_i = 1 / np.concatenate([self._x_scale, self._u_scale])

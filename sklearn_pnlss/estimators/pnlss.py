@@ -279,13 +279,8 @@ class PNLSSRegressor(StateSpaceRegressorBase):
     def _export_user_units(self):
         """Matrices in the user's units from the normalised model."""
         mdl = self._model
-        T, Ti = np.diag(self._x_scale), np.diag(1 / self._x_scale)
-        Su_i, Sy = np.diag(1 / self._u_scale), np.diag(self._y_scale)
+        T, Sy = self._export_linear_user_units()
         var_scale = np.concatenate([self._x_scale, self._u_scale])
-        self.A_ = T @ mdl.A @ Ti
-        self.B_ = T @ mdl.B @ Su_i
-        self.C_ = Sy @ mdl.C @ Ti
-        self.D_ = Sy @ mdl.D @ Su_i
         # zeta(x_n, u_n)_j = zeta_j(x, u) / prod(scale ** exponent)
         self.E_ = T @ mdl.E / np.prod(var_scale ** mdl.exE, axis=1)
         self.F_ = Sy @ mdl.F / np.prod(var_scale ** mdl.exF, axis=1)

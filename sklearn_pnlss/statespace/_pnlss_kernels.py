@@ -102,6 +102,19 @@ def _linearised(L, W, dterms, out):
             out[i, k] = acc
 
 
+@_jit
+def _propagate(M, S, out):
+    """out[:, :S.shape[1]] = M S: the sensitivities carried through the
+    local linear map (into the next state's, or into the output's)."""
+    for i in range(M.shape[0]):
+        for q in range(S.shape[1]):
+            out[i, q] = 0.0
+        for k in range(M.shape[1]):
+            c = M[i, k]
+            for q in range(S.shape[1]):
+                out[i, q] += c * S[k, q]
+
+
 @numba.njit(cache=True, nogil=True)
 def pnlss_simulate(A, B, C, D, E, F, exE, exF, U, x0):
     """Simulate; returns (Y, X, n_ok, x_end). n_ok < len(U) means the state
@@ -170,13 +183,8 @@ def pnlss_jacobian(A, B, C, D, E, F, exE, exF, U, x0, n_skip, J):
             _state_derivatives(exF, pw, n, deta)
             _linearised(C, F, deta, Cx)
             Jt = J[t - n_skip]
+            _propagate(Cx, Sx, Jt)
             for a in range(p):
-                for q in range(n_sx):
-                    Jt[a, q] = 0.0
-                for k in range(n):
-                    c = Cx[a, k]
-                    for q in range(n_sx):
-                        Jt[a, q] += c * Sx[k, q]
                 for q in range(n_sx, Jt.shape[1]):
                     Jt[a, q] = 0.0
                 for k in range(n):
@@ -187,13 +195,8 @@ def pnlss_jacobian(A, B, C, D, E, F, exE, exF, U, x0, n_skip, J):
                     Jt[a, oF + a * nF + k] = eta[k]
         # Sensitivity of the next state: the propagated part, then the
         # direct dependence of row i on its own parameters.
+        _propagate(Ax, Sx, Sx_next)
         for i in range(n):
-            for q in range(n_sx):
-                Sx_next[i, q] = 0.0
-            for k in range(n):
-                c = Ax[i, k]
-                for q in range(n_sx):
-                    Sx_next[i, q] += c * Sx[k, q]
             for k in range(n):
                 Sx_next[i, oA + i * n + k] += x[k]
             for k in range(m):
