@@ -6,10 +6,19 @@ from scipy.signal import lfilter
 from sklearn.exceptions import ConvergenceWarning
 
 from sklearn_pnlss.datasets import bouc_wen_oscillator, simulate_bouc_wen
+from numba import njit
+
 from sklearn_pnlss.physics import (
     BoucWen,
+    CoulombFriction,
+    CoupledMass,
     CubicStiffness,
+    CustomForce,
+    DeadZoneSpring,
     Oscillator,
+    QuadraticDamping,
+    QuadraticStiffness,
+    StiffnessDrift,
     decimate_fir,
     fir_decimation_filter,
     upsample_fft,
@@ -170,29 +179,64 @@ def _continuous_reference(forces_rhs, n_z, t_end, fs_out, amp, f0, rate):
     return sol.y[0]
 
 
-@pytest.mark.parametrize("case", ["cubic", "bouc_wen", "bouc_wen_nu2"])
-def test_nonlinear_elements_follow_continuous_dynamics(case):
-    fs_fine = 15000.0
-    amp, f0, rate, t_end = 40.0, 20.0, 10.0, 1.0
-    if case == "cubic":
-        forces = (CubicStiffness(1e10),)
+@njit
+def _cubic_spring_and_damper(p, y, yd):
+    return p[0] * y**3 + p[1] * yd**3, 3.0 * p[0] * y**2, 3.0 * p[1] * yd**2
 
-        def rhs(y, yd, z):
-            return 1e10 * y**3, np.zeros(0)
-        nz = 0
-    else:
+
+def _softplus(x, s):
+    return s * np.logaddexp(0.0, x / s)
+
+
+def _element_case(case):
+    """(force elements, continuous right-hand side F, zdot(y, yd, z), n_z)."""
+    if case == "cubic":
+        return (CubicStiffness(1e10),), lambda y, yd, z: (1e10 * y**3, np.zeros(0)), 0
+    if case in ("bouc_wen", "bouc_wen_nu2"):
         # nu = 2 needs gamma + delta > 0 to stay bounded (softening loop)
         alpha, beta, gamma, delta, nu = (
             (5e4, 1e3, 0.8, -1.1, 1.0) if case == "bouc_wen" else (5e4, 50.0, 0.8, -0.2, 2.0)
         )
-        forces = (BoucWen(alpha, beta, gamma, delta, nu),)
 
         def rhs(y, yd, z):
             zz = z[0]
             zd = alpha * yd - beta * (gamma * abs(yd) * abs(zz) ** (nu - 1) * zz
                                       + delta * yd * abs(zz) ** nu)
             return zz, np.array([zd])
-        nz = 1
+        return (BoucWen(alpha, beta, gamma, delta, nu),), rhs, 1
+    if case == "quadratic":
+        return (QuadraticStiffness(3e6),), lambda y, yd, z: (3e6 * y**2, np.zeros(0)), 0
+    if case == "coulomb":
+        return (CoulombFriction(4.0, 1e-2),), lambda y, yd, z: (4.0 * np.tanh(yd / 1e-2), np.zeros(0)), 0
+    if case == "quadratic_damping":
+        return (QuadraticDamping(200.0),), lambda y, yd, z: (200.0 * yd * abs(yd), np.zeros(0)), 0
+    if case == "dead_zone":
+        g, s = 3e-4, 1.5e-5
+        return ((DeadZoneSpring(5e4, g),),
+                lambda y, yd, z: (5e4 * (_softplus(y - g, s) - _softplus(-y - g, s)), np.zeros(0)), 0)
+    if case == "coupled_mass":
+        def rhs(y, yd, z):
+            f = 2e4 * (y - z[0]) + 2.0 * (yd - z[1])
+            return f, np.array([z[1], f / 0.2])
+        return (CoupledMass(0.2, 2.0, 2e4),), rhs, 2
+    if case == "drift":
+        # the clock state z = t makes the stiffness k - 1e4 t
+        return (StiffnessDrift(-1e4),), lambda y, yd, z: (-1e4 * z[0] * y, np.array([1.0])), 1
+    if case == "custom":
+        return ((CustomForce(_cubic_spring_and_damper, [5e9, 1.0], name="cubic"),),
+                lambda y, yd, z: (5e9 * y**3 + yd**3, np.zeros(0)), 0)
+    raise ValueError(case)
+
+
+ELEMENT_CASES = ["cubic", "bouc_wen", "bouc_wen_nu2", "quadratic", "coulomb", "quadratic_damping",
+                 "dead_zone", "coupled_mass", "drift", "custom"]
+
+
+@pytest.mark.parametrize("case", ELEMENT_CASES)
+def test_nonlinear_elements_follow_continuous_dynamics(case):
+    fs_fine = 15000.0
+    amp, f0, rate, t_end = 40.0, 20.0, 10.0, 1.0
+    forces, rhs, nz = _element_case(case)
     osc = Oscillator(M, C, K, forces=forces)
     t = np.arange(int(t_end * fs_fine)) / fs_fine
     sim = osc.simulate_fine(linear_chirp(t, f_start=f0, rate=rate, amplitude=amp),
@@ -205,6 +249,25 @@ def test_nonlinear_elements_follow_continuous_dynamics(case):
     # the element must matter, or the comparison above proves little
     lin = Oscillator(M, C, K).simulate_fine(sim.u, fs=fs_fine, periodic=False)
     assert _rel_rms(lin.y, ref) > 10 * err
+
+
+def test_time_varying_element_refuses_periodic_and_continues_from_a_state():
+    u = 10 * np.sin(2 * np.pi * 30 * np.arange(1500) / 15000.0)
+    drift = Oscillator(M, C, K, forces=(StiffnessDrift(-1e4),))
+    with pytest.raises(ValueError, match="periodic=False"):
+        drift.simulate_fine(u, fs=15000.0, periodic=True)
+    # a periodic steady state followed by a continuation equals the steady state
+    osc = bouc_wen_oscillator()
+    per = osc.simulate_fine(u, fs=15000.0, periodic=True)
+    cont = osc.simulate_fine(np.tile(u, 2), fs=15000.0, periodic=False, initial_state=per.final_state)
+    np.testing.assert_allclose(cont.y, np.tile(per.y, 2), rtol=0, atol=1e-10 * np.abs(per.y).max())
+    with pytest.raises(ValueError, match="initial_state"):
+        osc.simulate_fine(u, fs=15000.0, periodic=False, initial_state=np.zeros(2))
+
+
+def test_custom_force_must_be_compiled():
+    with pytest.raises(TypeError, match="numba.njit"):
+        CustomForce(lambda p, y, yd: (0.0, 0.0, 0.0))
 
 
 def test_steady_state_not_reached_warns():

@@ -3,16 +3,34 @@
 The integrator, resampling and noise reproduce the procedure behind the
 Bouc-Wen benchmark data (see :func:`sklearn_pnlss.datasets.simulate_bouc_wen`).
 """
-from .forces import BoucWen, CubicStiffness, ForceElement
+from .forces import (
+    BoucWen,
+    CoulombFriction,
+    CoupledMass,
+    CubicStiffness,
+    CustomForce,
+    DeadZoneSpring,
+    ForceElement,
+    QuadraticDamping,
+    QuadraticStiffness,
+    StiffnessDrift,
+)
 from .oscillator import FineSimulation, Oscillator, band_limited_noise
 from .resampling import decimate_fir, fir_decimation_filter, upsample_fft
 
 __all__ = [
     "BoucWen",
+    "CoulombFriction",
+    "CoupledMass",
     "CubicStiffness",
+    "CustomForce",
+    "DeadZoneSpring",
     "FineSimulation",
     "ForceElement",
     "Oscillator",
+    "QuadraticDamping",
+    "QuadraticStiffness",
+    "StiffnessDrift",
     "band_limited_noise",
     "decimate_fir",
     "fir_decimation_filter",

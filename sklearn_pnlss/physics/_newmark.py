@@ -9,12 +9,24 @@ reproduces them to round-off.
 
 Adding a force element type: write ``_xxx_force`` and (if it has internal
 states) ``_xxx_rate`` below, add one branch to ``_force`` and ``_rate`` and a
-class with the same kind code in :mod:`.forces`.
+class with the same kind code in :mod:`.forces`.  Users' own stateless
+elements arrive as one compiled function ``custom(slot, p, y, yd)`` (see
+:func:`custom_dispatcher`), passed to the integrator as an argument.
 """
 import numpy as np
 from numba import njit
 
-from .forces import KIND_BOUC_WEN, KIND_CUBIC_STIFFNESS
+from .forces import (
+    KIND_BOUC_WEN,
+    KIND_COULOMB_FRICTION,
+    KIND_COUPLED_MASS,
+    KIND_CUBIC_STIFFNESS,
+    KIND_CUSTOM,
+    KIND_DEAD_ZONE_SPRING,
+    KIND_QUADRATIC_DAMPING,
+    KIND_QUADRATIC_STIFFNESS,
+    KIND_STIFFNESS_DRIFT,
+)
 
 _JIT = dict(cache=True, nogil=True)
 
@@ -59,11 +71,104 @@ def _cubic_force(p, y, yd, z, dfdz):
 
 
 @njit(**_JIT)
-def _force(kind, p, y, yd, z, dfdz):
+def _quadratic_force(p, y, yd, z, dfdz):
+    return p[0] * y * y, 2.0 * p[0] * y, 0.0
+
+
+@njit(**_JIT)
+def _coulomb_force(p, y, yd, z, dfdz):
+    t = np.tanh(yd / p[1])
+    return p[0] * t, 0.0, p[0] * (1.0 - t * t) / p[1]
+
+
+@njit(**_JIT)
+def _quadratic_damping_force(p, y, yd, z, dfdz):
+    return p[0] * yd * abs(yd), 0.0, 2.0 * p[0] * abs(yd)
+
+
+@njit(**_JIT)
+def _softplus(x, s):
+    """s log(1 + exp(x / s)) and its derivative, without overflow."""
+    r = x / s
+    if r > 0:
+        e = np.exp(-r)
+        return x + s * np.log1p(e), 1.0 / (1.0 + e)
+    e = np.exp(r)
+    return s * np.log1p(e), e / (1.0 + e)
+
+
+@njit(**_JIT)
+def _dead_zone_force(p, y, yd, z, dfdz):
+    kb, gap, s = p[0], p[1], p[2]
+    up, dup = _softplus(y - gap, s)
+    down, ddown = _softplus(-y - gap, s)
+    return kb * (up - down), kb * (dup + ddown), 0.0
+
+
+@njit(**_JIT)
+def _coupled_mass_force(p, y, yd, z, dfdz):
+    c2, k2 = p[1], p[2]
+    dfdz[0] = -k2
+    dfdz[1] = -c2
+    return k2 * (y - z[0]) + c2 * (yd - z[1]), k2, c2
+
+
+@njit(**_JIT)
+def _coupled_mass_rate(p, y, yd, z, g, dgdy, dgdyd, dgdz):
+    m2, c2, k2 = p[0], p[1], p[2]
+    g[0] = z[1]
+    g[1] = (k2 * (y - z[0]) + c2 * (yd - z[1])) / m2
+    dgdy[0] = 0.0
+    dgdy[1] = k2 / m2
+    dgdyd[0] = 0.0
+    dgdyd[1] = c2 / m2
+    dgdz[0, 0] = 0.0
+    dgdz[0, 1] = 1.0
+    dgdz[1, 0] = -k2 / m2
+    dgdz[1, 1] = -c2 / m2
+
+
+@njit(**_JIT)
+def _drift_force(p, y, yd, z, dfdz):
+    # z[0] is the clock: the stiffness is k + rate * t.
+    dfdz[0] = p[0] * y
+    return p[0] * z[0] * y, p[0] * z[0], 0.0
+
+
+@njit(**_JIT)
+def _clock_rate(p, y, yd, z, g, dgdy, dgdyd, dgdz):
+    g[0] = 1.0
+    dgdy[0] = 0.0
+    dgdyd[0] = 0.0
+    dgdz[0, 0] = 0.0
+
+
+@njit(**_JIT)
+def no_custom(slot, p, y, yd):
+    """Placeholder custom dispatcher of an oscillator without custom elements."""
+    return np.nan, np.nan, np.nan
+
+
+@njit(**_JIT)
+def _force(kind, p, y, yd, z, dfdz, custom):
     if kind == KIND_BOUC_WEN:
         return _bouc_wen_force(p, y, yd, z, dfdz)
     elif kind == KIND_CUBIC_STIFFNESS:
         return _cubic_force(p, y, yd, z, dfdz)
+    elif kind == KIND_QUADRATIC_STIFFNESS:
+        return _quadratic_force(p, y, yd, z, dfdz)
+    elif kind == KIND_COULOMB_FRICTION:
+        return _coulomb_force(p, y, yd, z, dfdz)
+    elif kind == KIND_QUADRATIC_DAMPING:
+        return _quadratic_damping_force(p, y, yd, z, dfdz)
+    elif kind == KIND_DEAD_ZONE_SPRING:
+        return _dead_zone_force(p, y, yd, z, dfdz)
+    elif kind == KIND_COUPLED_MASS:
+        return _coupled_mass_force(p, y, yd, z, dfdz)
+    elif kind == KIND_STIFFNESS_DRIFT:
+        return _drift_force(p, y, yd, z, dfdz)
+    elif kind == KIND_CUSTOM:
+        return custom(int(p[0]), p[1:], y, yd)
     return np.nan, np.nan, np.nan  # unknown kind: poison the result, never hang
 
 
@@ -71,9 +176,42 @@ def _force(kind, p, y, yd, z, dfdz):
 def _rate(kind, p, y, yd, z, g, dgdy, dgdyd, dgdz):
     if kind == KIND_BOUC_WEN:
         _bouc_wen_rate(p, y, yd, z, g, dgdy, dgdyd, dgdz)
+    elif kind == KIND_COUPLED_MASS:
+        _coupled_mass_rate(p, y, yd, z, g, dgdy, dgdyd, dgdz)
+    elif kind == KIND_STIFFNESS_DRIFT:
+        _clock_rate(p, y, yd, z, g, dgdy, dgdyd, dgdz)
     else:
         for j in range(g.shape[0]):
             g[j] = np.nan
+
+
+_CUSTOM_DISPATCHERS = {}
+
+
+def custom_dispatcher(functions):
+    """One compiled ``custom(slot, p, y, yd)`` calling ``functions[slot]``.
+
+    The integrator takes a single function argument, so several custom
+    elements are chained into one dispatcher; it is built once per tuple of
+    functions (each new one costs a compilation of the integrator).
+    """
+    functions = tuple(functions)
+    if not functions:
+        return no_custom
+    key = tuple(id(f) for f in functions)
+    if key not in _CUSTOM_DISPATCHERS:
+        head = functions[0]
+        rest = custom_dispatcher(functions[1:])
+
+        @njit(nogil=True)
+        def dispatch(slot, p, y, yd):
+            if slot == 0:
+                return head(p, y, yd)
+            return rest(slot - 1, p, y, yd)
+
+        # Keep the functions alive with the key so ids are never reused.
+        _CUSTOM_DISPATCHERS[key] = (dispatch, functions)
+    return _CUSTOM_DISPATCHERS[key][0]
 
 
 # --------------------------------------------------------------------------
@@ -113,13 +251,14 @@ def _solve_inplace(a, b, n):
 
 
 @njit(**_JIT)
-def _total_force_and_rates(kinds, p_off, params, z_off, y, yd, z, zd, dfdz, dgdy, dgdyd, dgdz):
+def _total_force_and_rates(kinds, p_off, params, z_off, y, yd, z, zd, dfdz, dgdy, dgdyd, dgdz,
+                           custom):
     """Sum of element forces at (y, yd, z); fills the state rates zd."""
     total = 0.0
     for e in range(kinds.shape[0]):
         a, b = z_off[e], z_off[e + 1]
         pe = params[p_off[e]:p_off[e + 1]]
-        f, _, _ = _force(kinds[e], pe, y, yd, z[a:b], dfdz[a:b])
+        f, _, _ = _force(kinds[e], pe, y, yd, z[a:b], dfdz[a:b], custom)
         total += f
         if b > a:
             _rate(kinds[e], pe, y, yd, z[a:b], zd[a:b], dgdy[a:b], dgdyd[a:b], dgdz[a:b, a:b])
@@ -131,7 +270,7 @@ def _total_force_and_rates(kinds, p_off, params, z_off, y, yd, z, zd, dfdz, dgdy
 # --------------------------------------------------------------------------
 @njit(**_JIT)
 def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
-                init_accel, y_out, yd_out, z_out, rtol, max_iter):
+                init_accel, y_out, yd_out, z_out, rtol, max_iter, custom):
     """Integrate ``n_steps`` steps of length ``h`` from ``state`` (updated in place).
 
     Step ``i`` goes from time ``i h`` to ``(i + 1) h`` with input
@@ -170,7 +309,7 @@ def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
     if init_accel:
         # Start from equilibrium of the equation of motion at t = 0.
         ftot = _total_force_and_rates(kinds, p_off, params, z_off, y, yd, z, zd,
-                                      dfdz, dgdy, dgdyd, dgdz)
+                                      dfdz, dgdy, dgdyd, dgdz, custom)
         ydd = (u[0] - c * yd - k * y - ftot) / m
 
     peak[0] = abs(y)
@@ -213,7 +352,7 @@ def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
                 a, b = z_off[e], z_off[e + 1]
                 pe = params[p_off[e]:p_off[e + 1]]
                 ze = q[1 + a:1 + b]
-                f, dfdy, dfdyd = _force(kinds[e], pe, y1, yd1, ze, dfdz[a:b])
+                f, dfdy, dfdyd = _force(kinds[e], pe, y1, yd1, ze, dfdz[a:b], custom)
                 res[0] += f
                 jac[0, 0] += dfdy + dfdyd * c_vel
                 for j in range(a, b):
@@ -260,7 +399,7 @@ def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
         if nz > 0:
             # Rates at the converged point, as the next step's trapezoid needs.
             _total_force_and_rates(kinds, p_off, params, z_off, y, yd, z, zd,
-                                   dfdz, dgdy, dgdyd, dgdz)
+                                   dfdz, dgdy, dgdyd, dgdz, custom)
         peak[0] = max(peak[0], abs(y))
         for j in range(nz):
             peak[1 + j] = max(peak[1 + j], abs(z[j]))

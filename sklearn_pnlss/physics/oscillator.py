@@ -8,7 +8,7 @@ from scipy import fft as sp_fft
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.utils import check_random_state
 
-from ._newmark import STATE_Z, newmark_run
+from ._newmark import STATE_Z, custom_dispatcher, newmark_run
 from .forces import pack_forces
 from .resampling import _check_signal, check_factors, decimate_fir, upsample_fft
 
@@ -39,6 +39,10 @@ class FineSimulation:
         Periods simulated, the returned one included (1 if not periodic).
     n_newton_failures : int
         Steps where Newton-Raphson did not reach full convergence.
+    final_state : ndarray or None
+        The integrator's state after the last step: for a periodic
+        simulation, the steady state at the first sample of the next period,
+        to continue from with ``simulate_fine(..., initial_state=...)``.
     """
 
     t: np.ndarray
@@ -49,6 +53,7 @@ class FineSimulation:
     fs: float
     n_periods: int
     n_newton_failures: int
+    final_state: np.ndarray = None
 
 
 def _positive_real(name, value, *, allow_zero=False):
@@ -151,6 +156,7 @@ class Oscillator:
         self.stiffness = float(stiffness)
         self.forces = tuple(forces)
         self._packed = pack_forces(self.forces)
+        self._custom = custom_dispatcher(self._packed[4])
 
     def __repr__(self):
         return (
@@ -163,16 +169,28 @@ class Oscillator:
         """Total number of internal states of the force elements."""
         return int(self._packed[3][-1])
 
+    @property
+    def time_varying(self):
+        """True when a force element depends on time (no periodic steady state)."""
+        return any(f.time_varying for f in self.forces)
+
+    def with_forces(self, forces, **linear):
+        """A copy with other force elements (and optionally other ``mass``,
+        ``damping`` or ``stiffness``)."""
+        params = dict(mass=self.mass, damping=self.damping, stiffness=self.stiffness)
+        params.update(linear)
+        return Oscillator(forces=tuple(forces), **params)
+
     # ------------------------------------------------------------------
     def _run(self, u_fine, n_steps, h, state, init_accel, n_out):
-        kinds, p_off, params, z_off = self._packed
+        kinds, p_off, params, z_off, _ = self._packed
         y = np.empty(n_out)
         yd = np.empty(n_out)
         z = np.empty((n_out, self.n_internal_states))
         n_failed, _ = newmark_run(
             u_fine, n_steps, h, self.mass, self.damping, self.stiffness,
             kinds, p_off, params, z_off, state, init_accel, y, yd, z,
-            _NEWTON_RTOL, _NEWTON_MAX_ITER,
+            _NEWTON_RTOL, _NEWTON_MAX_ITER, self._custom,
         )
         if not (np.all(np.isfinite(y)) and np.all(np.isfinite(state))):
             raise FloatingPointError(
@@ -181,7 +199,8 @@ class Oscillator:
             )
         return y, yd, z, int(n_failed)
 
-    def simulate_fine(self, u_fine, *, fs, periodic, tol=1e-12, max_periods=200):
+    def simulate_fine(self, u_fine, *, fs, periodic, tol=1e-12, max_periods=200,
+                      initial_state=None):
         """Simulate at the integration rate and return all states.
 
         Parameters
@@ -202,6 +221,13 @@ class Oscillator:
             Cap on the number of simulated periods; a
             :class:`~sklearn.exceptions.ConvergenceWarning` is issued when the
             steady state is not reached.
+        initial_state : ndarray, default=None
+            Start from this integrator state instead of rest: the state at
+            the first sample, whose input must be ``u_fine[0]``.  The
+            ``final_state`` of a periodic simulation is such a state for the
+            next period (it holds the same oscillator's layout of
+            displacement, velocity, acceleration and internal states);
+            ``periodic`` must then be False.
 
         Returns
         -------
@@ -215,9 +241,26 @@ class Oscillator:
         n = u_fine.size
         nz = self.n_internal_states
         state = np.zeros(STATE_Z + 2 * nz)
+        if initial_state is not None:
+            if periodic:
+                raise ValueError("initial_state needs periodic=False.")
+            initial_state = np.asarray(initial_state, dtype=np.float64)
+            if initial_state.shape != state.shape or not np.all(np.isfinite(initial_state)):
+                raise ValueError(
+                    f"initial_state must be a finite final_state of this oscillator "
+                    f"(shape {state.shape}), got shape {initial_state.shape}."
+                )
+            state = initial_state.copy()
+            y, yd, z, n_failed = self._run(u_fine, n - 1, h, state, False, n)
+            return FineSimulation(np.arange(n) * h, u_fine, y, yd, z, fs, 1, n_failed, state)
         if not periodic:
             y, yd, z, n_failed = self._run(u_fine, n - 1, h, state, True, n)
-            return FineSimulation(np.arange(n) * h, u_fine, y, yd, z, fs, 1, n_failed)
+            return FineSimulation(np.arange(n) * h, u_fine, y, yd, z, fs, 1, n_failed, state)
+        if self.time_varying:
+            raise ValueError(
+                "a time-varying force element (e.g. StiffnessDrift) has no periodic "
+                "steady state: simulate with periodic=False."
+            )
 
         if not (np.isfinite(tol) and tol > 0):
             raise ValueError(f"tol must be a positive number, got {tol!r}.")
@@ -241,7 +284,7 @@ class Oscillator:
                 ConvergenceWarning,
                 stacklevel=2,
             )
-        return FineSimulation(np.arange(n) * h, u_fine, y, yd, z, fs, period, total_failed)
+        return FineSimulation(np.arange(n) * h, u_fine, y, yd, z, fs, period, total_failed, state)
 
     @staticmethod
     def _settled(start, end, y, yd, z, tol):
