@@ -1,13 +1,12 @@
 import numpy as np
 import pytest
+from numba import njit
 from scipy.integrate import solve_ivp
 from scipy.io import loadmat
 from scipy.signal import lfilter
 from sklearn.exceptions import ConvergenceWarning
 
 from sklearn_pnlss.datasets import bouc_wen_oscillator, simulate_bouc_wen
-from numba import njit
-
 from sklearn_pnlss.physics import (
     BoucWen,
     CoulombFriction,

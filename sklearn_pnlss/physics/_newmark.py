@@ -363,8 +363,8 @@ def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
                     for j in range(a, b):
                         res[1 + j] = q[1 + j] - z[j] - 0.5 * h * (zd[j] + g[j])
                         jac[1 + j, 0] = -0.5 * h * (dgdy[j] + dgdyd[j] * c_vel)
-                        for l in range(a, b):
-                            jac[1 + j, 1 + l] = -0.5 * h * dgdz[j, l]
+                        for col in range(a, b):
+                            jac[1 + j, 1 + col] = -0.5 * h * dgdz[j, col]
                         jac[1 + j, 1 + j] += 1.0
             for j in range(n):
                 res[j] = -res[j]
