@@ -411,3 +411,20 @@ def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
         state[STATE_Z + j] = z[j]
         state[STATE_Z + nz + j] = zd[j]
     return n_failed, n_iter
+
+
+@njit(**_JIT)
+def stateless_forces(kinds, p_off, params, z_off, y, yd, custom):
+    """Total force of the elements without internal states at each sample
+    of a motion ``(y, yd)`` (elements with states are skipped)."""
+    out = np.zeros(y.shape[0])
+    dfdz = np.zeros(1)
+    empty = np.zeros(0)
+    for e in range(kinds.shape[0]):
+        if z_off[e + 1] > z_off[e]:
+            continue
+        pe = params[p_off[e]:p_off[e + 1]]
+        for i in range(y.shape[0]):
+            f, _, _ = _force(kinds[e], pe, y[i], yd[i], empty, dfdz, custom)
+            out[i] += f
+    return out

@@ -8,7 +8,7 @@ from scipy import fft as sp_fft
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.utils import check_random_state
 
-from ._newmark import STATE_Z, custom_dispatcher, newmark_run
+from ._newmark import STATE_Z, custom_dispatcher, newmark_run, stateless_forces
 from .forces import pack_forces
 from .resampling import _check_signal, check_factors, decimate_fir, upsample_fft
 
@@ -173,6 +173,26 @@ class Oscillator:
     def time_varying(self):
         """True when a force element depends on time (no periodic steady state)."""
         return any(f.time_varying for f in self.forces)
+
+    def restoring_force(self, y, yd):
+        """The force ``c yd + k y + sum_e F_e(y, yd)`` of the elements without
+        internal states, along a motion (the stateful ones, e.g. Bouc-Wen,
+        need their state history and are left out).
+
+        Parameters
+        ----------
+        y, yd : ndarray of shape (n,)
+            Displacement and velocity.
+
+        Returns
+        -------
+        force : ndarray of shape (n,)
+        """
+        y = np.ascontiguousarray(y, dtype=np.float64)
+        yd = np.ascontiguousarray(yd, dtype=np.float64)
+        kinds, p_off, params, z_off, _ = self._packed
+        return self.damping * yd + self.stiffness * y + stateless_forces(
+            kinds, p_off, params, z_off, y, yd, self._custom)
 
     def with_forces(self, forces, **linear):
         """A copy with other force elements (and optionally other ``mass``,

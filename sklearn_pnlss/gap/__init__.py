@@ -1,0 +1,9 @@
+"""Sim-to-real gap diagnosis: where a physical simulator misses the
+measurements, which unmodelled effect causes it, how far adding it shrinks
+the gap (see :class:`GapDiagnosis`)."""
+from .decision import RankedEffect
+from .diagnosis import GapDiagnosis
+from .effects import Effect, Scales, default_effects
+from .report import GapReport
+
+__all__ = ["GapDiagnosis", "GapReport", "RankedEffect", "Effect", "Scales", "default_effects"]

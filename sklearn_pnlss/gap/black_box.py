@@ -1,0 +1,86 @@
+"""The black-box opinion: a decoupled PNLSS model of the same data.
+
+Fitted without any physics, it tells how much of the gap a model can close
+at all, and its univariate branches hint at the nature of the missing
+effect: which physical signal a branch acts on (displacement, velocity or
+input force) and whether its nonlinearity is odd or even, smooth or sharp.
+"""
+import numpy as np
+
+__all__ = ["fit_black_box", "branch_opinions"]
+
+# Small, fast settings: the black box is a yardstick, not the product.
+N_STATES = 3
+N_BRANCHES = 3
+DEGREE = 7
+
+
+def fit_black_box(u_list, y_list, period, random_state, n_jobs):
+    """A decoupled PNLSS fitted to the training signals, or None when the
+    data do not allow one (no periodic signals)."""
+    from ..estimators import DecoupledPNLSSRegressor, PNLSSRegressor
+
+    if period is None or not any(u.size % period == 0 for u in u_list):
+        return None
+    X = [u[:, None] for u in u_list]
+    y = [v[:, None] for v in y_list]
+    start = PNLSSRegressor(N_STATES, degrees=(2, 3), variables="states_inputs", period=period,
+                           max_iter=40, random_state=random_state)
+    model = DecoupledPNLSSRegressor(N_STATES, n_branches=N_BRANCHES, degree=DEGREE, period=period,
+                                    n_init=2, max_iter=40, start_model=start, n_jobs=n_jobs,
+                                    random_state=random_state)
+    try:
+        return model.fit(X, y)
+    except ValueError:
+        return None
+
+
+def branch_opinions(model, u_list, y_list, velocity_list, scales):
+    """What each branch of the black box acts on and its shape.
+
+    Returns
+    -------
+    opinions : list of dict
+        Per branch: ``acts_on`` (shares of displacement, velocity and input
+        in the branch input, summing to 1), ``odd_share`` (share of the
+        nonlinear part that is odd), ``sharpness`` (share of the nonlinear
+        part above degree 3), ``nonlinear_share`` (nonlinear part over the
+        whole branch output) and a one-line ``reading``.
+    """
+    X = [u[:, None] for u in u_list]
+    z_list = model.branch_inputs(X)
+    z = np.concatenate([np.asarray(zz) for zz in z_list])
+    phys = np.column_stack([
+        np.concatenate(y_list) / scales.displacement,
+        np.concatenate(velocity_list) / scales.velocity,
+        np.concatenate(u_list) / scales.force,
+    ])
+    coef, *_ = np.linalg.lstsq(phys, z, rcond=None)
+    z_grid, g_grid = model.branch_values()
+    opinions = []
+    for b in range(z.shape[1]):
+        share = np.abs(coef[:, b]) / max(np.abs(coef[:, b]).sum(), 1e-300)
+        g = model.coef_[b]
+        zb = z[:, b]
+        degrees = np.arange(1, g.size + 1)
+        terms = zb[:, None] ** degrees * g  # (n, d): each degree's contribution
+        linear = terms[:, 0]
+        odd = terms[:, (degrees % 2 == 1) & (degrees > 1)].sum(axis=1)
+        even = terms[:, degrees % 2 == 0].sum(axis=1)
+        high = terms[:, degrees > 3].sum(axis=1)
+        nl = odd + even
+        rms = np.sqrt(np.mean(nl**2))
+        odd_share = float(np.sqrt(np.mean(odd**2)) / max(np.sqrt(np.mean(odd**2)) + np.sqrt(np.mean(even**2)),
+                                                         1e-300))
+        sharpness = float(np.sqrt(np.mean(high**2)) / max(rms, 1e-300))
+        nl_share = float(rms / max(np.sqrt(np.mean((linear + nl) ** 2)), 1e-300))
+        names = ("displacement", "velocity", "input")
+        main = names[int(np.argmax(share))]
+        kind = "odd" if odd_share > 0.6 else "even" if odd_share < 0.4 else "mixed odd/even"
+        shape = "sharp" if sharpness > 0.5 else "smooth"
+        opinions.append(dict(
+            acts_on=dict(zip(names, map(float, share))), odd_share=odd_share, sharpness=sharpness,
+            nonlinear_share=nl_share, z=z_grid[:, b], g=g_grid[:, b],
+            reading=f"{kind}, {shape} nonlinearity mostly of the {main} ({100 * share.max():.0f} %)",
+        ))
+    return opinions

@@ -1,0 +1,186 @@
+"""Fit an effect's parameters by simulation error on the training signals.
+
+Few parameters (one to six) and an expensive, smooth simulation: a bounded
+trust-region least-squares (scipy's ``trf``) with a forward-difference
+Jacobian in the dimensionless parameters, started from the best of a few
+listed starting points.  A start or trial point whose simulation diverges or
+is not physical gets a large residual, so the trust region shrinks away from
+it; it is never returned.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from .simulate import simulate_signals
+
+__all__ = ["EffectFit", "with_recalibration", "fit_effect", "effect_model"]
+
+# Residual given to a trial point that diverges or is not physical, relative
+# to the displacement scale: far above any real misfit.
+_PENALTY = 1e3
+_FD_STEP = 1e-5
+
+
+@dataclass
+class EffectFit:
+    """An effect fitted to the training signals.
+
+    Attributes
+    ----------
+    effect : Effect
+    theta : ndarray
+        Dimensionless parameters.
+    physical : dict
+        Physical parameter values.
+    train_mse : float
+        Mean squared training simulation error, m^2.
+    n_evaluations : int
+        Simulations of the training set used.
+    converged : bool
+    message : str
+    """
+
+    effect: object
+    theta: np.ndarray
+    physical: dict
+    train_mse: float
+    n_evaluations: int
+    converged: bool
+    message: str
+
+
+def with_recalibration(effect, recalibration):
+    """The effect with the nominal mass, damping and stiffness free too."""
+    from .effects import Effect
+
+    n = effect.n_params
+
+    def build(theta, nominal, scales):
+        forces, _, transform, physical = effect.build(theta[:n], nominal, scales)
+        _, linear, _, lin_phys = recalibration.build(theta[n:], nominal, scales)
+        return forces, linear, transform, {**physical, **lin_phys}
+
+    starts = [np.concatenate([s, recalibration.starts[0]]) for s in effect.starts]
+    bounds = (np.concatenate([effect.bounds[0], recalibration.bounds[0]]),
+              np.concatenate([effect.bounds[1], recalibration.bounds[1]]))
+    return Effect(effect.name, effect.param_names + recalibration.param_names, starts, bounds, build,
+                  effect.description, effect.is_recalibration)
+
+
+def effect_model(effect, theta, nominal, scales):
+    """The nominal oscillator with the effect added: ``(oscillator,
+    input transform, physical parameters)``; raises ValueError when the
+    parameters are not physical."""
+    forces, linear, transform, physical = effect.build(np.asarray(theta, float), nominal, scales)
+    osc = nominal.with_forces(nominal.forces + tuple(forces), **linear)
+    return osc, transform, physical
+
+
+class _Objective:
+    """Residuals of one effect on the training set, counting simulations."""
+
+    def __init__(self, effect, nominal, scales, signals, y_meas):
+        self.effect, self.nominal, self.scales = effect, nominal, scales
+        self.signals, self.y_meas = signals, y_meas
+        self.size = sum(y.size for y in y_meas)
+        self.n_evaluations = 0
+
+    def __call__(self, theta):
+        self.n_evaluations += 1
+        try:
+            osc, transform, _ = effect_model(self.effect, theta, self.nominal, self.scales)
+            y_sim = simulate_signals(osc, self.signals, transform)
+        except (ValueError, FloatingPointError, ZeroDivisionError):
+            return np.full(self.size, _PENALTY)
+        r = np.concatenate([ys - ym for ys, ym in zip(y_sim, self.y_meas)]) / self.scales.displacement
+        if not np.all(np.isfinite(r)) or np.max(np.abs(r)) > _PENALTY:
+            return np.full(self.size, _PENALTY)
+        return r
+
+    def jacobian(self, theta, r0, lower, upper):
+        J = np.empty((r0.size, theta.size))
+        for i in range(theta.size):
+            step = _FD_STEP * max(1.0, abs(theta[i]))
+            if theta[i] + step > upper[i]:
+                step = -step  # stay inside the bounds
+            t = theta.copy()
+            t[i] += step
+            J[:, i] = (self(t) - r0) / step
+        return J
+
+
+def _solve(obj, theta0, lower, upper, max_nfev):
+    cache = {}
+
+    def fun(theta):
+        key = theta.tobytes()
+        if key not in cache:
+            cache.clear()  # the Jacobian asks for the last point only
+            cache[key] = obj(theta)
+        return cache[key]
+
+    def jac(theta):
+        return obj.jacobian(theta, fun(theta), lower, upper)
+
+    # Keep the start strictly inside the bounds, as trf requires.
+    span = upper - lower
+    theta0 = np.clip(theta0, lower + 1e-9 * span, upper - 1e-9 * span)
+    res = least_squares(fun, theta0, jac=jac, bounds=(lower, upper), method="trf",
+                        x_scale="jac", max_nfev=max_nfev, xtol=1e-6, ftol=1e-8)
+    return res.x, res.status > 0, res.message, float(np.sum(fun(res.x) ** 2))
+
+
+def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_signals=None):
+    """Fit one effect by simulation error.
+
+    Parameters
+    ----------
+    effect : Effect
+    nominal : Oscillator
+    scales : Scales
+    signals : SignalSet
+        Training inputs.
+    y_meas : list of ndarray
+        Measured training outputs (same lengths as the inputs).
+    max_nfev : int, default=30
+        Trust-region iterations at most.
+    fine_signals : SignalSet, default=None
+        The training inputs at the reporting rate when ``signals`` is a
+        coarse set (see :meth:`SignalSet.coarse`): the fit is then refined
+        with the fitted model's own discretisation error.
+
+    Returns
+    -------
+    EffectFit
+    """
+    obj = _Objective(effect, nominal, scales, signals, y_meas)
+    lower, upper = effect.bounds
+    starts = [np.clip(s, lower, upper) for s in effect.starts]
+    costs = [np.sum(obj(s) ** 2) for s in starts]
+    theta = starts[int(np.argmin(costs))]
+    converged, message = True, "nothing to fit"
+    if effect.n_params:
+        theta, converged, message, cost = _solve(obj, theta, lower, upper, max_nfev)
+        if cost > min(costs):  # never worse than the best start
+            theta = starts[int(np.argmin(costs))]
+    n_evaluations = obj.n_evaluations
+    if effect.n_params and fine_signals is not None and signals.correction is not None:
+        # Defect correction: carry the fitted model's own discretisation
+        # error (fine minus coarse) and refine; the remaining bias is then
+        # second order in the parameter change.
+        osc, transform, _ = effect_model(effect, theta, nominal, scales)
+        try:
+            fine = simulate_signals(osc, fine_signals, transform)
+            plain = signals.without_correction()
+            corrected = signals.with_correction(
+                [f - c for f, c in zip(fine, simulate_signals(osc, plain, transform))])
+            obj = _Objective(effect, nominal, scales, corrected, y_meas)
+            theta, converged, message, _ = _solve(obj, theta, lower, upper, max(3, max_nfev // 4))
+            n_evaluations += obj.n_evaluations + 2
+        except (ValueError, FloatingPointError):
+            pass  # keep the coarse estimate
+    r = obj(theta)
+    mse = float(np.mean(r**2)) * scales.displacement**2
+    _, _, physical = effect_model(effect, theta, nominal, scales)
+    return EffectFit(effect, theta, physical, mse, n_evaluations, bool(converged), str(message))

@@ -1,0 +1,180 @@
+"""Score candidates on validation signals and name the effect behind a gap.
+
+The rules, in order:
+
+1. **Is there a gap?**  The nominal simulation error is tested against the
+   noise floor (chi-square with the noise's effective degrees of freedom,
+   Bonferroni over signals) and must also exceed it by ``MIN_EXCESS_DB``:
+   otherwise the answer is ``None``.
+2. **Closure.**  Each candidate's closure is the fraction of the gap's
+   excess over the noise floor that it removes on the validation signals:
+   ``(mse_before - mse_after) / (mse_before - noise)``, averaged over
+   signals (1: down to the noise, 0: no better than the nominal).
+3. **Parsimony.**  Candidates within statistical reach of the best closure
+   are equivalent; among them refitting the nominal parameters
+   (``recalibration``) is preferred to new physics, then fewer parameters.
+4. **Explained?**  The chosen candidate must close ``EXPLAINED_CLOSURE`` of
+   the gap, or come as close to the data as the black-box model does;
+   otherwise the answer is ``"unexplained"`` (the ranking still shows what
+   each candidate achieved).
+"""
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from .noise import gap_test
+
+__all__ = ["RankedEffect", "Decision", "decide", "MIN_EXCESS_DB", "EXPLAINED_CLOSURE"]
+
+#: A gap smaller than this above the noise floor is not worth a diagnosis.
+MIN_EXCESS_DB = 0.5
+#: Fraction of the gap's excess over the noise a candidate must remove.
+EXPLAINED_CLOSURE = 0.9
+#: Closure difference below which two candidates count as equally good,
+#: on top of the statistical spread of the noise.
+TIE_CLOSURE = 0.02
+
+
+@dataclass
+class RankedEffect:
+    """One candidate's result on the validation signals.
+
+    Attributes
+    ----------
+    name : str
+    params : dict
+        Fitted physical parameters.
+    n_params : int
+    gap_before_db, gap_after_db : float
+        Validation gap (mean over signals of ``10 log10`` of the mean square
+        error) of the nominal simulator and with the effect, dB.
+    shrink_db : float
+        ``gap_before_db - gap_after_db``.
+    closure : float
+        Fraction of the gap's excess over the noise floor removed.
+    train_gap_db : float
+        Training gap with the effect, dB.
+    per_signal_after_db : list of float
+    """
+
+    name: str
+    params: dict
+    n_params: int
+    gap_before_db: float
+    gap_after_db: float
+    shrink_db: float
+    closure: float
+    train_gap_db: float
+    per_signal_after_db: list = field(default_factory=list)
+
+    def __getitem__(self, key):
+        return getattr(self, key)
+
+    def to_dict(self):
+        d = asdict(self)
+        d["params"] = {k: float(v) for k, v in self.params.items()}
+        return d
+
+
+@dataclass
+class Decision:
+    """The verdict and the numbers behind it (see the module docstring)."""
+
+    best_effect: object
+    significant: bool
+    p_value: float
+    explained: bool
+    ranking: list
+    gap_before_db: float
+    per_signal_before_db: list
+    noise_floor_db: float
+    black_box_gap_db: float
+    black_box_closure: float
+    reason: str
+
+
+def _db(x):
+    return float(10 * np.log10(max(x, 1e-300)))
+
+
+def _mse(a, b):
+    return float(np.mean((a - b) ** 2))
+
+
+def decide(fits, y_meas, y_nominal, y_effects, y_black_box, noise, significance):
+    """Rank candidates and decide; see the module docstring."""
+    before = np.array([_mse(m, s) for m, s in zip(y_meas, y_nominal)])
+    sizes = np.array([m.size for m in y_meas])
+    noise_var = noise.variance if noise is not None else 0.0
+    excess = np.maximum(before - noise_var, 1e-300)
+
+    def closure(after):
+        return float(np.mean(np.clip((before - after) / excess, -10.0, 1.0)))
+
+    ranking = []
+    for fit, ys in zip(fits, y_effects):
+        if ys is None:  # diverged on a validation signal
+            after = np.full(before.shape, np.inf)
+        else:
+            after = np.array([_mse(m, s) for m, s in zip(y_meas, ys)])
+        after_db = [_db(a) if np.isfinite(a) else float("inf") for a in after]
+        gap_after = float(np.mean(after_db))
+        gap_before = float(np.mean([_db(b) for b in before]))
+        ranking.append(RankedEffect(
+            name=fit.effect.name, params=dict(fit.physical), n_params=fit.effect.n_params,
+            gap_before_db=gap_before, gap_after_db=gap_after, shrink_db=gap_before - gap_after,
+            closure=closure(after) if np.all(np.isfinite(after)) else -np.inf,
+            train_gap_db=_db(fit.train_mse), per_signal_after_db=after_db,
+        ))
+    order = sorted(range(len(ranking)), key=lambda i: (-ranking[i].closure, ranking[i].n_params))
+    ranking = [ranking[i] for i in order]
+    fit_by_name = {f.effect.name: f for f in fits}
+
+    bb_gap = bb_closure = float("nan")
+    if y_black_box is not None:
+        bb_after = np.array([_mse(m, s) for m, s in zip(y_meas, y_black_box)])
+        bb_gap = float(np.mean([_db(a) for a in bb_after]))
+        bb_closure = closure(bb_after)
+
+    gap_before_db = float(np.mean([_db(b) for b in before]))
+    common = dict(ranking=ranking, gap_before_db=gap_before_db,
+                  per_signal_before_db=[_db(b) for b in before],
+                  noise_floor_db=_db(noise_var) if noise is not None else float("nan"),
+                  black_box_gap_db=bb_gap, black_box_closure=bb_closure)
+
+    if noise is not None:
+        p = min(1.0, len(before) * min(gap_test(b, noise, n) for b, n in zip(before, sizes)))
+        excess_db = max(_db(b) for b in before) - _db(noise_var)
+        if p > significance or excess_db < MIN_EXCESS_DB:
+            return Decision(None, False, p, True, reason=(
+                f"no significant gap: the nominal error is {excess_db:.2f} dB above the noise "
+                f"floor (p = {p:.2g})"), **common)
+    else:
+        p = float("nan")
+
+    best = ranking[0]
+    # Statistical reach of a closure: the noise power's spread over the
+    # validation samples, relative to the gap's excess.
+    spread = 0.0
+    if noise is not None:
+        nu = np.maximum(noise.dof_per_sample * sizes, 1.0)
+        spread = float(np.mean(3 * noise_var * np.sqrt(2 / nu) / excess))
+    equivalent = [r for r in ranking if r.closure >= best.closure - TIE_CLOSURE - spread]
+    recal = [r for r in equivalent if fit_by_name[r.name].effect.is_recalibration]
+    chosen = recal[0] if recal else min(equivalent, key=lambda r: (r.n_params, -r.closure))
+
+    reaches_black_box = (np.isfinite(bb_closure) and bb_closure < EXPLAINED_CLOSURE
+                         and chosen.closure >= bb_closure - TIE_CLOSURE - spread)
+    explained = chosen.closure >= EXPLAINED_CLOSURE or reaches_black_box
+    if explained:
+        name = chosen.name
+        reason = (f"{chosen.name} closes {100 * chosen.closure:.0f} % of the gap "
+                  f"({chosen.gap_before_db:.1f} -> {chosen.gap_after_db:.1f} dB)")
+        if len(equivalent) > 1:
+            others = ", ".join(r.name for r in equivalent if r is not chosen)
+            reason += f"; as good within the noise: {others} (more parameters or new physics)"
+    else:
+        name = "unexplained"
+        reason = (f"the best candidate, {best.name}, closes only {100 * best.closure:.0f} % of the gap"
+                  + (f"; the black box closes {100 * bb_closure:.0f} %" if np.isfinite(bb_closure) else ""))
+    return Decision(name, True, p, explained, reason=reason, **common)

@@ -1,0 +1,279 @@
+"""GapDiagnosis: where a physical simulator misses the measurements, which
+unmodelled effect explains it, and by how much adding it shrinks the gap."""
+import time
+from numbers import Integral, Real
+
+import numpy as np
+from joblib import Parallel, delayed
+from sklearn.base import BaseEstimator, _fit_context
+from sklearn.utils._param_validation import Interval
+from sklearn.utils.validation import check_is_fitted
+
+from ..physics.oscillator import Oscillator
+from ..utils.validation import as_signal_list, check_period
+from .black_box import fit_black_box
+from .calibrate import fit_effect, with_recalibration
+from .decision import decide
+from .effects import Scales, default_effects, make_effect
+from .noise import estimate_noise
+from .report import GapReport
+from .simulate import SignalSet, simulate_signals
+from .where import locate_gap, signal_derivative
+
+__all__ = ["GapDiagnosis"]
+
+
+def _siso(X, name, min_samples=16):
+    signals, _ = as_signal_list(X, name=name, min_samples=min_samples)
+    if signals[0].shape[1] != 1:
+        raise ValueError(
+            f"{name} must have one channel (the oscillator has one input force and one "
+            f"displacement output), got {signals[0].shape[1]}."
+        )
+    return [s[:, 0] for s in signals]
+
+
+def _check_pairs(u_list, y_list, xname, yname):
+    if len(u_list) != len(y_list):
+        raise ValueError(f"{xname} holds {len(u_list)} signals but {yname} holds {len(y_list)}.")
+    for i, (u, y) in enumerate(zip(u_list, y_list)):
+        if u.size != y.size:
+            raise ValueError(f"{xname}[{i}] has {u.size} samples but {yname}[{i}] has {y.size}.")
+
+
+class GapDiagnosis(BaseEstimator):
+    """Diagnose the gap between a physical simulator and measurements.
+
+    ``fit`` fits every candidate effect, added to the nominal simulator, to
+    the measured training signals by simulation error (and a black-box
+    decoupled PNLSS model of the same data); ``report`` scores them on
+    validation signals, says whether there is a significant gap, where it
+    lies, which effect explains it and how far it shrinks.
+
+    Parameters
+    ----------
+    nominal : Oscillator
+        The user's physical simulator (mass, damping, stiffness and its
+        force elements).
+    fs : float
+        Sampling rate of the signals, Hz.
+    period : int, default=None
+        Samples per period of periodic excitations.  A signal whose length
+        is a multiple of it is periodic steady state (simulated
+        periodically); any other signal starts from rest.  Periodic signals
+        of two periods or more give the noise floor.
+    effects : list of str or ForceElement, default=None
+        Candidate effects: names from :func:`default_effects` and/or the
+        user's own force elements (every parameter of which is fitted from
+        its given value).  None: all built-in effects.
+    free_nominal : bool, default=False
+        Refit the nominal mass, damping and stiffness together with each
+        effect (``recalibration`` alone is always a candidate when listed).
+    oversampling : int, default=20
+        Integration rate over ``fs`` of every reported simulation (the
+        benchmark's 20); the output is FIR-decimated by its prime factors.
+    fit_oversampling : int, default=5
+        Integration rate over ``fs`` while fitting the candidates, with the
+        nominal model's discretisation error carried over (see
+        :meth:`SignalSet.coarse`); the fitted parameters are then scored at
+        ``oversampling``.
+    black_box : bool, default=True
+        Also fit a decoupled PNLSS model to tell how much of the gap any
+        model can close, and read its branches as a second opinion.
+    significance : float, default=1e-3
+        Level of the test of the gap against the noise floor.
+    max_nfev : int, default=20
+        Trust-region iterations per candidate.
+    n_jobs : int, default=None
+        Candidates fitted in parallel (threads; the integrator releases the
+        GIL).
+    random_state : int, RandomState instance or None, default=None
+        Seed of the black-box model's random starts.
+    verbose : int, default=0
+        Print progress.
+
+    Attributes
+    ----------
+    scales_ : Scales
+        Force, displacement, velocity and duration scales of the data.
+    noise_ : NoiseFloor or None
+        Noise floor from the training periods (None with single periods).
+    fits_ : list of EffectFit
+        The fitted candidates, in the order of ``effects``.
+    black_box_ : DecoupledPNLSSRegressor or None
+    train_gap_db_ : float
+        Mean square training gap of the nominal simulator, dB.
+    fit_time_ : float
+        Seconds spent in ``fit``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sklearn_pnlss.gap import GapDiagnosis
+    >>> from sklearn_pnlss.physics import Oscillator, CubicStiffness
+    >>> from sklearn_pnlss.signals import multisine
+    >>> X, _ = multisine(1024, fs=750.0, rms=50.0, n_periods=2, n_realizations=1,
+    ...                  random_state=0)
+    >>> nominal = Oscillator(2.0, 10.0, 5e4)
+    >>> real = Oscillator(2.0, 10.0, 5e4, forces=(CubicStiffness(1e8),))
+    >>> y = real.simulate(X[0, :, 0], fs=750.0, periodic=True, noise_rms=2e-6,
+    ...                   random_state=0)
+    >>> diag = GapDiagnosis(nominal, fs=750.0, period=1024,
+    ...                     effects=["cubic_stiffness", "quadratic_damping"],
+    ...                     black_box=False).fit(X, y[None, :, None])
+    >>> diag.report(X, y[None, :, None]).best_effect
+    'cubic_stiffness'
+    """
+
+    _parameter_constraints = {
+        "nominal": [Oscillator],
+        "fs": [Interval(Real, 0, None, closed="neither")],
+        "period": [Interval(Integral, 2, None, closed="left"), None],
+        "effects": [list, tuple, None],
+        "free_nominal": ["boolean"],
+        "oversampling": [Interval(Integral, 1, None, closed="left")],
+        "fit_oversampling": [Interval(Integral, 1, None, closed="left")],
+        "black_box": ["boolean"],
+        "significance": [Interval(Real, 0, 1, closed="neither")],
+        "max_nfev": [Interval(Integral, 1, None, closed="left")],
+        "n_jobs": [Integral, None],
+        "random_state": ["random_state"],
+        "verbose": ["verbose"],
+    }
+
+    def __init__(self, nominal, *, fs, period=None, effects=None, free_nominal=False,
+                 oversampling=20, fit_oversampling=5, black_box=True, significance=1e-3,
+                 max_nfev=20, n_jobs=None, random_state=None, verbose=0):
+        self.nominal = nominal
+        self.fs = fs
+        self.period = period
+        self.effects = effects
+        self.free_nominal = free_nominal
+        self.oversampling = oversampling
+        self.fit_oversampling = fit_oversampling
+        self.black_box = black_box
+        self.significance = significance
+        self.max_nfev = max_nfev
+        self.n_jobs = n_jobs
+        self.random_state = random_state
+        self.verbose = verbose
+
+    # ------------------------------------------------------------------
+    def _signal_set(self, u_list, oversampling=None):
+        return SignalSet.from_signals(u_list, self.period, self.fs, oversampling or self.oversampling)
+
+    def _candidates(self):
+        names = default_effects() if self.effects is None else list(self.effects)
+        if not names:
+            raise ValueError("effects is empty; pass None for all built-in effects.")
+        effects = [make_effect(e) for e in names]
+        seen = set()
+        for e in effects:
+            if e.name in seen:
+                raise ValueError(f"effect {e.name!r} is listed twice in effects.")
+            seen.add(e.name)
+        if self.free_nominal:
+            recal = make_effect("recalibration")
+            effects = [e if e.is_recalibration else with_recalibration(e, recal) for e in effects]
+        return effects
+
+    def _log(self, text):
+        if self.verbose:
+            print(f"[GapDiagnosis] {text}", flush=True)
+
+    @_fit_context(prefer_skip_nested_validation=True)
+    def fit(self, X, y):
+        """Fit every candidate effect (and the black box) to training signals.
+
+        Parameters
+        ----------
+        X : array-like of shape (n_signals, n_samples, 1), or list of signals
+            Measured input force.
+        y : array-like of shape (n_signals, n_samples, 1), or list of signals
+            Measured displacement.
+
+        Returns
+        -------
+        self : GapDiagnosis
+        """
+        start = time.perf_counter()
+        self.period_ = check_period(self.period)
+        u_list, y_list = _siso(X, "X"), _siso(y, "y")
+        _check_pairs(u_list, y_list, "X", "y")
+        effects = self._candidates()
+        train = self._signal_set(u_list)
+
+        y_all = np.concatenate(y_list)
+        u_all = np.concatenate(u_list)
+        velocity = np.concatenate([signal_derivative(yy, self.fs, P, self.period)
+                                   for yy, P in zip(y_list, train.n_periods)])
+        if np.std(u_all) == 0 or np.std(y_all) == 0:
+            raise ValueError("X and y must not be constant: a diagnosis needs an excited response.")
+        self.scales_ = Scales(
+            force=float(np.sqrt(np.mean(u_all**2))),
+            displacement=float(np.sqrt(np.mean(y_all**2))),
+            velocity=float(np.sqrt(np.mean(velocity**2))),
+            duration=max(u.size for u in u_list) / self.fs,
+            u_peak=float(np.max(np.abs(u_all))),
+            fs=float(self.fs),
+        )
+        self.noise_ = estimate_noise(y_list, self.period)
+        y_nominal = simulate_signals(self.nominal, train)
+        self.train_gap_db_ = float(10 * np.log10(np.mean(np.concatenate(
+            [a - b for a, b in zip(y_nominal, y_list)]) ** 2)))
+
+        coarse = train.coarse(self.fit_oversampling, self.nominal)
+        self._log(f"fitting {len(effects)} candidates on {len(u_list)} signals")
+        self.fits_ = Parallel(n_jobs=self.n_jobs, prefer="threads")(
+            delayed(fit_effect)(e, self.nominal, self.scales_, coarse, y_list, max_nfev=self.max_nfev,
+                                fine_signals=train)
+            for e in effects
+        )
+        for f in self.fits_:
+            self._log(f"{f.effect.name}: training {10 * np.log10(f.train_mse):.2f} dB, "
+                      f"{f.n_evaluations} simulations")
+        self.black_box_ = None
+        if self.black_box:
+            self.black_box_ = fit_black_box(u_list, y_list, self.period, self.random_state, self.n_jobs)
+        self._train = (u_list, y_list)
+        self._train_nominal = y_nominal
+        self.fit_time_ = time.perf_counter() - start
+        return self
+
+    def report(self, X_val, y_val):
+        """Score the candidates on validation signals and explain the gap.
+
+        Parameters
+        ----------
+        X_val, y_val : signals as in :meth:`fit`
+            Validation signals never used in ``fit``, e.g. one steady-state
+            multisine period and a swept sine from rest.
+
+        Returns
+        -------
+        GapReport
+        """
+        check_is_fitted(self, "fits_")
+        u_list, y_list = _siso(X_val, "X_val"), _siso(y_val, "y_val")
+        _check_pairs(u_list, y_list, "X_val", "y_val")
+        val = self._signal_set(u_list)
+        y_nominal = simulate_signals(self.nominal, val)
+
+        def simulate_fit(fit):
+            from .calibrate import effect_model
+            osc, transform, _ = effect_model(fit.effect, fit.theta, self.nominal, self.scales_)
+            try:
+                return simulate_signals(osc, val, transform)
+            except FloatingPointError:
+                return None
+
+        y_effects = Parallel(n_jobs=self.n_jobs, prefer="threads")(
+            delayed(simulate_fit)(f) for f in self.fits_)
+        y_black_box = None if self.black_box_ is None else self.black_box_.predict(
+            [u[:, None] for u in u_list])
+        if y_black_box is not None:
+            y_black_box = [np.asarray(p)[:, 0] for p in y_black_box]
+        decision = decide(self.fits_, y_list, y_nominal, y_effects, y_black_box, self.noise_,
+                          self.significance)
+        where = locate_gap(self, u_list, y_list, y_nominal, val.n_periods)
+        return GapReport.build(self, decision, where, u_list, y_list, where["velocity"])

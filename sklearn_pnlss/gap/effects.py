@@ -1,0 +1,307 @@
+"""Candidate unmodelled effects: what each adds to the nominal simulator.
+
+An effect is described by a few dimensionless parameters ``theta`` that are
+turned into physical values with the scales of the measured data (input force
+rms ``F``, displacement rms ``Y``, velocity rms ``V``, duration ``T``), so
+that one optimiser setting fits every effect on every structure, and zero
+(or the listed start) means "no effect".  An effect changes the nominal
+oscillator (extra force elements, other linear parameters) and may transform
+the input before it reaches the structure (saturation, delay).
+"""
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..physics.forces import (
+    BoucWen,
+    CoulombFriction,
+    CoupledMass,
+    CubicStiffness,
+    CustomForce,
+    DeadZoneSpring,
+    ForceElement,
+    QuadraticDamping,
+    QuadraticStiffness,
+    StiffnessDrift,
+)
+
+__all__ = ["Scales", "Effect", "default_effects", "make_effect", "BUILT_IN"]
+
+
+@dataclass(frozen=True)
+class Scales:
+    """Scales of the measured data that make effect parameters dimensionless.
+
+    Attributes
+    ----------
+    force : float
+        Rms of the input force, N.
+    displacement : float
+        Rms of the measured displacement, m.
+    velocity : float
+        Rms of the measured velocity, m/s.
+    duration : float
+        Duration of the longest training signal, s.
+    u_peak : float
+        Largest absolute input value, N.
+    fs : float
+        Data rate, Hz.
+    """
+
+    force: float
+    displacement: float
+    velocity: float
+    duration: float
+    u_peak: float
+    fs: float
+
+    @property
+    def stiffness(self):
+        """Force per displacement at the measured levels, N/m."""
+        return self.force / self.displacement
+
+
+@dataclass
+class Effect:
+    """One candidate effect.
+
+    Attributes
+    ----------
+    name : str
+        Name used in reports.
+    param_names : tuple of str
+        Names of the physical parameters reported.
+    starts : list of ndarray
+        Starting points of ``theta`` (the best by training error is refined).
+    bounds : (ndarray, ndarray)
+        Lower and upper bounds of ``theta``.
+    build : callable
+        ``build(theta, nominal, scales) -> (forces, linear, input_transform,
+        physical)``: extra force elements, a dict of changed linear
+        parameters (``mass``, ``damping``, ``stiffness``), an input transform
+        ``f(u_fine, fs_fine, periodic)`` or None, and a dict of the physical
+        parameter values.
+    description : str
+        One line saying what the effect is.
+    """
+
+    name: str
+    param_names: tuple
+    starts: list
+    bounds: tuple
+    build: callable
+    description: str = ""
+    is_recalibration: bool = field(default=False)
+
+    @property
+    def n_params(self):
+        return len(self.param_names)
+
+
+def _box(*pairs):
+    lo, hi = zip(*pairs)
+    return np.array(lo, float), np.array(hi, float)
+
+
+def _no_input(forces, physical, linear=None):
+    return tuple(forces), dict(linear or {}), None, physical
+
+
+# -- built-in effects -----------------------------------------------------------
+def _hysteresis(theta, nominal, s):
+    # Bouc-Wen with nu = 1: only beta*gamma and beta*delta matter, so beta is
+    # fixed to 1 / Y and gamma, delta carry the shape.
+    alpha = theta[0] * s.stiffness
+    beta = 1.0 / s.displacement
+    el = BoucWen(alpha, beta, theta[1], theta[2], 1.0)
+    return _no_input([el], dict(alpha=alpha, beta=beta, gamma=theta[1], delta=theta[2]))
+
+
+def _cubic(theta, nominal, s):
+    k3 = theta[0] * s.force / s.displacement**3
+    return _no_input([CubicStiffness(k3)], dict(k3=k3))
+
+
+def _quadratic(theta, nominal, s):
+    k2 = theta[0] * s.force / s.displacement**2
+    return _no_input([QuadraticStiffness(k2)], dict(k2=k2))
+
+
+def _coulomb(theta, nominal, s):
+    fc = theta[0] * s.force
+    # Smoothed over 1 % of the rms velocity: close to a sign function at the
+    # velocities that carry the response, smooth enough for Newton.
+    return _no_input([CoulombFriction(fc, 0.01 * s.velocity)], dict(fc=fc))
+
+
+def _quadratic_damping(theta, nominal, s):
+    c2 = theta[0] * s.force / s.velocity**2
+    return _no_input([QuadraticDamping(c2)], dict(c2=c2))
+
+
+def _backlash(theta, nominal, s):
+    kb = theta[0] * s.stiffness
+    gap = theta[1] * s.displacement
+    return _no_input([DeadZoneSpring(kb, gap, max(gap, 1e-3 * s.displacement) / 20)],
+                     dict(kb=kb, gap=gap))
+
+
+def _second_mode(theta, nominal, s):
+    # Parametrised by the attached mass (relative to the nominal one), the
+    # natural frequency of the attached oscillator (relative to the nominal
+    # mode) and its damping ratio: well scaled, and any positive values are
+    # a physical structure.
+    w1 = np.sqrt(max(nominal.stiffness, 1e-12 * s.stiffness) / nominal.mass)
+    m2 = theta[0] * nominal.mass
+    w2 = theta[1] * w1
+    k2 = m2 * w2**2
+    c2 = 2 * theta[2] * m2 * w2
+    return _no_input([CoupledMass(m2, c2, k2)], dict(m2=m2, c2=c2, k2=k2, f2_hz=w2 / (2 * np.pi)))
+
+
+def _drift(theta, nominal, s):
+    rate = theta[0] * s.stiffness / s.duration
+    return _no_input([StiffnessDrift(rate)], dict(rate=rate))
+
+
+def _saturation(theta, nominal, s):
+    level = theta[0] * s.u_peak
+
+    def transform(u_fine, fs_fine, periodic):
+        return np.clip(u_fine, -level, level)
+
+    return (), {}, transform, dict(u_max=level)
+
+
+def _delay(theta, nominal, s):
+    tau = theta[0] / s.fs
+
+    def transform(u_fine, fs_fine, periodic):
+        return delay_signal(u_fine, tau * fs_fine, periodic)
+
+    return (), {}, transform, dict(delay_s=tau)
+
+
+def _recalibration(theta, nominal, s):
+    linear = dict(
+        mass=nominal.mass * (1 + theta[0]),
+        damping=nominal.damping + theta[1] * s.force / s.velocity,
+        stiffness=nominal.stiffness + theta[2] * s.stiffness,
+    )
+    return (), linear, None, dict(linear)
+
+
+def delay_signal(u, shift, periodic):
+    """``u`` delayed by ``shift`` samples (fractional): circularly by the
+    DFT when periodic, by linear interpolation from rest otherwise."""
+    if shift == 0:
+        return u
+    n = u.size
+    if periodic:
+        k = np.fft.rfftfreq(n)
+        return np.fft.irfft(np.fft.rfft(u) * np.exp(-2j * np.pi * k * shift), n)
+    t = np.arange(n) - shift
+    return np.interp(t, np.arange(n), u, left=0.0, right=u[-1])
+
+
+def _single(lo, hi, starts=(0.0,)):
+    return [np.array([v]) for v in starts], _box((lo, hi))
+
+
+def _built_in():
+    effects = {}
+
+    def add(name, params, starts, bounds, build, description):
+        effects[name] = Effect(name, tuple(params), [np.asarray(s, float) for s in starts], bounds, build,
+                               description)
+
+    add("hysteresis", ("alpha", "beta", "gamma", "delta"),
+        [[0.3, 0.5, 0.0], [0.3, 0.5, -0.5], [1.0, 0.5, -0.7]],
+        _box((0.0, 10.0), (-5.0, 5.0), (-5.0, 5.0)), _hysteresis,
+        "Bouc-Wen hysteretic force (nu = 1)")
+    add("cubic_stiffness", ("k3",), *_single(-2.0, 2.0), _cubic, "cubic spring k3 y^3 (odd)")
+    add("quadratic_stiffness", ("k2",), *_single(-2.0, 2.0), _quadratic,
+        "quadratic spring k2 y^2 (asymmetric, even)")
+    add("coulomb_friction", ("fc",), *_single(-2.0, 2.0), _coulomb, "dry friction fc sign(ydot)")
+    add("quadratic_damping", ("c2",), *_single(-2.0, 2.0), _quadratic_damping,
+        "quadratic damping c2 ydot |ydot|")
+    add("backlash", ("kb", "gap"), [[0.3, 0.5], [0.3, 1.0], [0.3, 1.5]],
+        _box((-5.0, 50.0), (0.0, 20.0)), _backlash, "dead-zone spring engaged beyond a clearance")
+    add("input_saturation", ("u_max",), *_single(0.05, 1.5, (0.95, 0.8, 0.6)), _saturation,
+        "actuator force clipped at +-u_max")
+    add("input_delay", ("delay_s",), *_single(-20.0, 200.0, (0.0,)), _delay,
+        "input delayed by a (fractional) time")
+    add("second_mode", ("m2", "c2", "k2"),
+        [[0.2, r, 0.02] for r in (0.5, 0.8, 1.25, 2.0, 3.0)],
+        _box((1e-3, 5.0), (0.05, 20.0), (1e-4, 1.0)), _second_mode,
+        "a second mass coupled by a spring and a damper")
+    add("stiffness_drift", ("rate",), *_single(-1.0, 1.0), _drift,
+        "stiffness changing linearly over time")
+    add("recalibration", ("mass", "damping", "stiffness"), [np.zeros(3)],
+        _box((-0.9, 10.0), (-5.0, 5.0), (-5.0, 5.0)), _recalibration,
+        "nominal mass, damping and stiffness refitted, no new physics")
+    effects["recalibration"].is_recalibration = True
+    return effects
+
+
+BUILT_IN = tuple(_built_in())
+
+
+def default_effects():
+    """Names of the built-in candidate effects.
+
+    Returns
+    -------
+    names : list of str
+
+    Examples
+    --------
+    >>> from sklearn_pnlss.gap import default_effects
+    >>> default_effects()[:3]
+    ['hysteresis', 'cubic_stiffness', 'quadratic_stiffness']
+    """
+    return list(BUILT_IN)
+
+
+def _element_effect(element):
+    """A user's force element as a candidate: every parameter is fitted,
+    relative to its given value (or on a unit scale when it is zero)."""
+    p0 = np.asarray(element.parameters(), dtype=float)
+    scale = np.where(p0 != 0, np.abs(p0), 1.0)
+    name = element.name if isinstance(element, CustomForce) else type(element).__name__
+    if isinstance(element, CustomForce):
+        def rebuild(p):
+            return element.with_params(p)
+        names = tuple(f"p{i}" for i in range(p0.size))
+    else:
+        def rebuild(p):
+            return type(element)(*p)
+        names = tuple(type(element)._param_names)
+
+    def build(theta, nominal, s):
+        p = p0 + theta * scale
+        return _no_input([rebuild(p)], dict(zip(names, p)))
+
+    n = p0.size
+    return Effect(name, names, [np.zeros(n)], (np.full(n, -50.0), np.full(n, 50.0)), build,
+                  f"user element {element!r}")
+
+
+def make_effect(effect):
+    """An :class:`Effect` from a built-in name, a force element or an Effect."""
+    if isinstance(effect, Effect):
+        return effect
+    if isinstance(effect, str):
+        table = _built_in()
+        if effect not in table:
+            raise ValueError(
+                f"unknown effect {effect!r}; the built-in effects are {list(table)} "
+                "(or pass a ForceElement instance as your own candidate)."
+            )
+        return table[effect]
+    if isinstance(effect, ForceElement):
+        return _element_effect(effect)
+    raise TypeError(
+        f"effects must hold effect names (see default_effects()) or ForceElement "
+        f"instances, got {effect!r}."
+    )

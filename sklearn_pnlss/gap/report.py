@@ -1,0 +1,241 @@
+"""The diagnosis report: verdict, ranking, where the gap lies, figures."""
+import numpy as np
+
+from .black_box import branch_opinions
+
+__all__ = ["GapReport"]
+
+
+def _plain(x):
+    """JSON-ready copy: arrays to lists, numpy scalars to floats."""
+    if isinstance(x, dict):
+        return {k: _plain(v) for k, v in x.items() if k not in ("samples", "velocity")}
+    if isinstance(x, (list, tuple)):
+        return [_plain(v) for v in x]
+    if isinstance(x, np.ndarray):
+        return _plain(x.tolist())
+    if isinstance(x, (np.floating, float)):
+        return None if not np.isfinite(x) else float(x)
+    if isinstance(x, (np.integer, np.bool_)):
+        return x.item()
+    return x
+
+
+class GapReport:
+    """What :meth:`GapDiagnosis.report` finds on validation signals.
+
+    Attributes
+    ----------
+    best_effect : str or None
+        The effect that explains the gap; ``"recalibration"`` when refitting
+        the nominal parameters suffices, ``None`` when there is no
+        significant gap, ``"unexplained"`` when no candidate explains it.
+    significant : bool
+        Whether the nominal simulator's gap exceeds the noise floor.
+    ranking : list of RankedEffect
+        Every candidate, best closure first: name, fitted parameters,
+        validation gap before and after (dB), shrink (dB), closure ratio.
+    gap_db, noise_floor_db : float
+        Validation gap of the nominal simulator and the noise floor, dB.
+    black_box : dict or None
+        The decoupled PNLSS yardstick: its validation gap and closure, and
+        the reading of each branch (``branches``).
+    where : dict
+        Frequency, amplitude, state-plane and time analyses (see
+        :func:`sklearn_pnlss.gap.where.locate_gap`).
+    reason : str
+        One sentence behind the verdict.
+    """
+
+    def __init__(self, *, decision, where, scales, noise, black_box, fits, opinions=None):
+        self.decision = decision
+        self.where = where
+        self.scales = scales
+        self.noise = noise
+        self.fits = fits
+        self.best_effect = decision.best_effect
+        self.significant = decision.significant
+        self.explained = decision.explained
+        self.p_value = decision.p_value
+        self.ranking = decision.ranking
+        self.gap_db = decision.gap_before_db
+        self.noise_floor_db = decision.noise_floor_db
+        self.reason = decision.reason
+        self.black_box = None
+        if black_box is not None:
+            self.black_box = dict(gap_after_db=decision.black_box_gap_db,
+                                  closure=decision.black_box_closure,
+                                  n_params=int(black_box.n_params_), branches=opinions or [])
+
+    @classmethod
+    def build(cls, diag, decision, where, u_list, y_list, velocity):
+        opinions = None
+        if diag.black_box_ is not None:
+            opinions = branch_opinions(diag.black_box_, u_list, y_list, velocity, diag.scales_)
+        return cls(decision=decision, where=where, scales=diag.scales_, noise=diag.noise_,
+                   black_box=diag.black_box_, fits=diag.fits_, opinions=opinions)
+
+    # ------------------------------------------------------------------
+    def to_dict(self):
+        """Everything in the report as plain JSON-ready types."""
+        return _plain(dict(
+            best_effect=self.best_effect, significant=self.significant, explained=self.explained,
+            p_value=self.p_value, reason=self.reason, gap_db=self.gap_db,
+            per_signal_gap_db=self.decision.per_signal_before_db, noise_floor_db=self.noise_floor_db,
+            ranking=[r.to_dict() for r in self.ranking], black_box=self.black_box, where=self.where,
+        ))
+
+    def __str__(self):
+        lines = ["Sim-to-real gap diagnosis", "=" * 25]
+        verdict = {None: "no significant gap", "unexplained": "gap not explained by any candidate"}
+        lines.append(f"verdict: {verdict.get(self.best_effect, self.best_effect)}")
+        lines.append(f"  {self.reason}")
+        lines.append(f"nominal gap {self.gap_db:.2f} dB, noise floor {self.noise_floor_db:.2f} dB"
+                     + (f", p = {self.p_value:.2g}" if np.isfinite(self.p_value) else ""))
+        if self.black_box is not None:
+            lines.append(f"black box (decoupled PNLSS, {self.black_box['n_params']} parameters): "
+                         f"{self.black_box['gap_after_db']:.2f} dB, closure "
+                         f"{100 * self.black_box['closure']:.0f} %")
+            for i, b in enumerate(self.black_box["branches"]):
+                lines.append(f"  branch {i + 1}: {b['reading']}")
+        lines.append("")
+        lines.append(f"{'candidate':<22}{'params':>7}{'after dB':>10}{'shrink dB':>11}{'closure':>9}")
+        for r in self.ranking:
+            lines.append(f"{r.name:<22}{r.n_params:>7}{r.gap_after_db:>10.2f}{r.shrink_db:>11.2f}"
+                         f"{100 * r.closure:>8.0f}%")
+        best = next((r for r in self.ranking if r.name == self.best_effect), None)
+        if best is not None:
+            params = ", ".join(f"{k} = {v:.4g}" for k, v in best.params.items())
+            lines.append(f"\n{best.name}: {params}")
+        freq = self.where.get("frequency")
+        if freq is not None:
+            lines.append("\nwhere in frequency (validation, periodic signals):")
+            lines.append(f"  {'band Hz':<16}{'gap dB':>9}{'noise dB':>10}{'significant lines':>19}")
+            for b in freq["bands"]:
+                lines.append(f"  {b['f_lo']:6.1f}-{b['f_hi']:<8.1f}{b['gap_db']:>9.1f}{b['noise_db']:>10.1f}"
+                             f"{b['n_significant']:>10d} / {b['n_lines']}")
+            if freq["detection_lines"]:
+                for k, v in freq["line_kinds"].items():
+                    lines.append(f"  {k}: {v['n_significant']} of {v['n_lines']} lines significant")
+        drift = self.where.get("time", {}).get("drift")
+        if drift is not None:
+            lines.append(f"\nperiod-to-period change of the training response: "
+                         f"{drift['change_vs_noise_db'][-1]:.1f} dB over noise"
+                         + (" (drifting)" if drift["drifting"] else ""))
+        return "\n".join(lines)
+
+    def __repr__(self):
+        return f"GapReport(best_effect={self.best_effect!r}, gap_db={self.gap_db:.2f})"
+
+    # ------------------------------------------------------------------
+    def plot(self, fig=None):
+        """Figures of the report: ranking, gap spectrum, amplitude, missing
+        force map, gap over time, black-box branches.
+
+        Returns
+        -------
+        fig : matplotlib Figure
+        """
+        import matplotlib.pyplot as plt
+
+        if fig is None:
+            fig = plt.figure(figsize=(15, 9))
+        axes = fig.subplots(2, 3).ravel()
+        self._plot_ranking(axes[0])
+        self._plot_frequency(axes[1])
+        self._plot_amplitude(axes[2])
+        self._plot_force_map(fig, axes[3])
+        self._plot_time(axes[4])
+        self._plot_branches(axes[5])
+        fig.suptitle(f"Gap diagnosis: {self.best_effect}")
+        fig.tight_layout()
+        return fig
+
+    def _plot_ranking(self, ax):
+        names = [r.name for r in self.ranking]
+        after = [r.gap_after_db for r in self.ranking]
+        ax.barh(names, after, color=["C2" if n == self.best_effect else "C0" for n in names])
+        ax.axvline(self.gap_db, color="C3", label="nominal")
+        if np.isfinite(self.noise_floor_db):
+            ax.axvline(self.noise_floor_db, color="k", ls="--", label="noise floor")
+        if self.black_box is not None:
+            ax.axvline(self.black_box["gap_after_db"], color="C1", ls=":", label="black box")
+        finite = [a for a in after if np.isfinite(a)] + [self.gap_db]
+        ax.set_xlim(min(finite + [self.noise_floor_db if np.isfinite(self.noise_floor_db) else self.gap_db]) - 3,
+                    self.gap_db + 3)
+        ax.invert_yaxis()
+        ax.set_xlabel("validation gap (dB)")
+        ax.legend(fontsize="small")
+        ax.set_title("candidates")
+
+    def _plot_frequency(self, ax):
+        freq = self.where.get("frequency")
+        ax.set_title("gap spectrum")
+        if freq is None:
+            ax.text(0.5, 0.5, "no periodic validation signal", ha="center", transform=ax.transAxes)
+            return
+        f = freq["frequency"]
+        ax.plot(f, 10 * np.log10(np.maximum(freq["gap_power"], 1e-300)), ".", ms=2, label="gap")
+        sig = freq["significant"]
+        ax.plot(f[sig], 10 * np.log10(freq["gap_power"][sig]), "o", mfc="none", ms=3, label="significant")
+        ax.plot(f, 10 * np.log10(np.maximum(freq["noise_power"], 1e-300)), "k", lw=0.8, label="noise")
+        if freq["distortion_power"] is not None:
+            d = freq["distortion_power"]
+            m = d > 0
+            ax.plot(f[m], 10 * np.log10(d[m]), ".", ms=2, color="C3", label="NL distortion")
+        ax.set_xlim(0, freq["bands"][-1]["f_hi"])
+        ax.set_xlabel("frequency (Hz)")
+        ax.set_ylabel("dB")
+        ax.legend(fontsize="small")
+
+    def _plot_amplitude(self, ax):
+        amp = self.where["amplitude"]
+        for name in ("displacement", "velocity"):
+            rows = amp[name]["bins"]
+            x = np.arange(len(rows)) + 0.5
+            ax.plot(x, [r["gap_db"] for r in rows], "o-", label=name)
+        if amp["displacement"]["noise_db"] is not None:
+            ax.axhline(amp["displacement"]["noise_db"], color="k", ls="--", label="noise")
+        ax.set_xlabel("level bin (quantiles of |.|)")
+        ax.set_ylabel("gap (dB)")
+        ax.set_title("gap against amplitude")
+        ax.legend(fontsize="small")
+
+    def _plot_force_map(self, fig, ax):
+        m = self.where["state_plane"]
+        mesh = ax.pcolormesh(m["displacement_edges"], m["velocity_edges"], m["force"].T, cmap="RdBu_r",
+                             shading="flat")
+        fig.colorbar(mesh, ax=ax, label="missing force (N)")
+        ax.set_xlabel("displacement (m)")
+        ax.set_ylabel("velocity (m/s)")
+        ax.set_title("missing force map")
+
+    def _plot_time(self, ax):
+        t = self.where["time"]
+        if t["sweeps"]:
+            w = t["sweeps"][0]["windows"]
+            ax.plot([r["frequency"] for r in w], [r["gap_db"] for r in w], "o-", label="gap")
+            ax.plot([r["frequency"] for r in w], [r["output_db"] for r in w], "-", color="0.6", label="output")
+            ax.set_xlabel("instantaneous frequency of the sweep (Hz)")
+            ax.set_title("gap along the sweep")
+        elif t["drift"] is not None:
+            ch = t["drift"]["change_vs_noise_db"]
+            ax.plot(np.arange(1, len(ch) + 1), ch, "o-")
+            ax.set_xlabel("period")
+            ax.set_title("change from the first period over noise")
+        else:
+            ax.text(0.5, 0.5, "no sweep or multi-period signal", ha="center", transform=ax.transAxes)
+        ax.set_ylabel("dB")
+        if t["sweeps"]:
+            ax.legend(fontsize="small")
+
+    def _plot_branches(self, ax):
+        ax.set_title("black-box branches")
+        if self.black_box is None or not self.black_box["branches"]:
+            ax.text(0.5, 0.5, "no black box", ha="center", transform=ax.transAxes)
+            return
+        for i, b in enumerate(self.black_box["branches"]):
+            ax.plot(b["z"], b["g"], label=f"{i + 1}: {b['reading'][:30]}")
+        ax.set_xlabel("branch input z")
+        ax.set_ylabel("g(z)")
+        ax.legend(fontsize="x-small")

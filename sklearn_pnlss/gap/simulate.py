@@ -1,0 +1,193 @@
+"""Simulate an oscillator on measured input signals, the benchmark way.
+
+Each signal is either steady-state periodic (its length is ``P`` periods) or
+starts from rest.  A periodic signal is simulated over one period until
+steady state and repeated, unless the oscillator is time-varying (stiffness
+drift): then the steady state of the oscillator frozen at ``t = 0`` is the
+start, and the ``P`` periods are integrated one after the other.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+from sklearn.utils import check_random_state
+
+from ..physics._newmark import STATE_Z
+from ..physics.forces import StiffnessDrift
+from ..physics.oscillator import band_limited_noise
+from ..physics.resampling import decimate_fir, upsample_fft
+
+__all__ = ["SignalSet", "simulate_signals", "prime_factors"]
+
+
+def prime_factors(n):
+    """Decimation chain for an oversampling factor: its prime factors,
+    smallest first (20 -> (2, 2, 5), as the benchmark's chain)."""
+    factors, d = [], 2
+    while n > 1:
+        while n % d == 0:
+            factors.append(d)
+            n //= d
+        d += 1
+    return tuple(factors) or (1,)
+
+
+@dataclass
+class SignalSet:
+    """Input signals with their periodicity and their inputs at the
+    integration rate (computed once, reused by every simulation).
+
+    Attributes
+    ----------
+    u : list of ndarray (n_samples_i,)
+    n_periods : list of int
+        Periods of each signal (0: starts from rest).
+    period : int or None
+    fs : float
+    oversampling : int
+    decimation : tuple of int
+    """
+
+    u: list
+    n_periods: list
+    period: int
+    fs: float
+    oversampling: int
+    decimation: tuple
+
+    def __post_init__(self):
+        self.correction = None
+        self.u_fine = []
+        for u, P in zip(self.u, self.n_periods):
+            if P:
+                self.u_fine.append(upsample_fft(u[: self.period], self.oversampling, periodic=True))
+            else:
+                self.u_fine.append(upsample_fft(u, self.oversampling, periodic=False))
+
+    @classmethod
+    def from_signals(cls, u_list, period, fs, oversampling, decimation=None):
+        n_periods = []
+        for u in u_list:
+            n = u.size
+            n_periods.append(n // period if period and n % period == 0 and n >= period else 0)
+        decimation = prime_factors(oversampling) if decimation is None else tuple(decimation)
+        return cls(list(u_list), n_periods, period, float(fs), int(oversampling), decimation)
+
+    def coarse(self, oversampling, nominal):
+        """The same signals integrated at a lower rate, corrected by the
+        nominal model's discretisation error.
+
+        The difference between the nominal simulation at this set's rate and
+        at ``oversampling`` is added to every coarse simulation: what remains
+        is the change of that error due to an effect, second order in the
+        effect's size.  At 5 times the data rate the nominal Bouc-Wen error
+        is -44 dB and the corrected one falls well below the noise, for a
+        fourth of the cost.
+        """
+        if oversampling >= self.oversampling:
+            return self
+        out = SignalSet(self.u, self.n_periods, self.period, self.fs, int(oversampling),
+                        prime_factors(oversampling))
+        fine = simulate_signals(nominal, self)
+        out.correction = [f - c for f, c in zip(fine, simulate_signals(nominal, out))]
+        return out
+
+    def without_correction(self):
+        """This set with no correction added to its simulations."""
+        return self.with_correction(None)
+
+    def with_correction(self, correction):
+        """This set with another correction (shares the inputs)."""
+        out = self.subset(range(len(self.u)))
+        out.correction = correction
+        return out
+
+    def subset(self, index):
+        """The signals at ``index`` (inputs at the integration rate shared)."""
+        out = SignalSet.__new__(SignalSet)
+        out.u = [self.u[i] for i in index]
+        out.n_periods = [self.n_periods[i] for i in index]
+        out.u_fine = [self.u_fine[i] for i in index]
+        out.correction = None if self.correction is None else [self.correction[i] for i in index]
+        out.period, out.fs = self.period, self.fs
+        out.oversampling, out.decimation = self.oversampling, self.decimation
+        return out
+
+
+def _frozen(osc):
+    """The oscillator at t = 0: its time-varying elements left out."""
+    return osc.with_forces([f for f in osc.forces if not f.time_varying])
+
+
+def _continuation_state(osc, frozen_state):
+    """The integrator state of ``osc`` from the steady state of its frozen
+    version: time-varying elements start with their clock at zero."""
+    nz = osc.n_internal_states
+    state = np.zeros(STATE_Z + 2 * nz)
+    state[:STATE_Z] = frozen_state[:STATE_Z]
+    nz_frozen = (frozen_state.size - STATE_Z) // 2
+    j = jf = 0
+    for f in osc.forces:
+        for _ in range(f.n_states):
+            if f.time_varying:
+                state[STATE_Z + nz + j] = 1.0 if isinstance(f, StiffnessDrift) else 0.0
+            else:
+                state[STATE_Z + j] = frozen_state[STATE_Z + jf]
+                state[STATE_Z + nz + j] = frozen_state[STATE_Z + nz_frozen + jf]
+                jf += 1
+            j += 1
+    return state
+
+
+def _fine_response(osc, u_fine, P, fs_fine, transform):
+    """Displacement at the integration rate over the whole signal."""
+    periodic = P > 0
+    if transform is not None:
+        u_fine = transform(u_fine, fs_fine, periodic)
+    if not periodic:
+        return osc.simulate_fine(u_fine, fs=fs_fine, periodic=False).y
+    if not osc.time_varying:
+        return np.tile(osc.simulate_fine(u_fine, fs=fs_fine, periodic=True).y, P)
+    start = _frozen(osc).simulate_fine(u_fine, fs=fs_fine, periodic=True).final_state
+    return osc.simulate_fine(np.tile(u_fine, P), fs=fs_fine, periodic=False,
+                             initial_state=_continuation_state(osc, start)).y
+
+
+def simulate_signals(osc, signals, transform=None, *, noise_rms=0.0, random_state=None):
+    """Simulate ``osc`` on every signal of a :class:`SignalSet`.
+
+    Parameters
+    ----------
+    osc : Oscillator
+    signals : SignalSet
+    transform : callable or None
+        ``transform(u_fine, fs_fine, periodic)`` applied to the input at the
+        integration rate (actuator effects).
+    noise_rms : float, default=0.0
+        Output noise added at the integration rate before decimation,
+        band-limited to the data's Nyquist frequency (the benchmark's noise).
+    random_state : int, RandomState instance or None
+        Seed of the noise.
+
+    Returns
+    -------
+    y : list of ndarray (n_samples_i,)
+        Displacement at the data rate.  Raises ``FloatingPointError`` when
+        the simulation diverges.
+    """
+    rng = check_random_state(random_state)
+    fs_fine = signals.fs * signals.oversampling
+    out = []
+    for u_fine, P in zip(signals.u_fine, signals.n_periods):
+        y_fine = _fine_response(osc, u_fine, P, fs_fine, transform)
+        if noise_rms > 0:
+            y_fine = y_fine + band_limited_noise(y_fine.size, fs=fs_fine, f_max=signals.fs / 2,
+                                                 rms=noise_rms, random_state=rng)
+        # A time-invariant periodic record is periodic at the fine rate, so
+        # its decimation is circular; a drifting one is not.
+        circular = P > 0 and not osc.time_varying
+        if signals.oversampling > 1:
+            y_fine = decimate_fir(y_fine, signals.decimation, periodic=circular)
+        out.append(y_fine)
+    if signals.correction is not None:
+        out = [y + c for y, c in zip(out, signals.correction)]
+    return out

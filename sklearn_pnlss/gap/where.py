@@ -1,0 +1,262 @@
+"""Where the gap lies: frequency, amplitude, the (displacement, velocity)
+plane and time.
+
+Everything is computed on the validation signals against the noise floor
+of the training periods; the nonlinear distortion level comes from the
+spread of the training realisations around their best linear approximation.
+"""
+import numpy as np
+from scipy import stats
+from scipy.signal import hilbert
+
+from ..frequency.bla import excited_lines, periodic_bla
+
+__all__ = ["signal_derivative", "locate_gap"]
+
+N_BANDS = 8
+N_LEVELS = 8
+MAP_BINS = 12
+MIN_PER_CELL = 20
+N_WINDOWS = 40
+
+
+def _band_limit(n, fs, f_max):
+    """DFT bins of an n-sample record kept by a low-pass at f_max."""
+    f = np.fft.rfftfreq(n, 1 / fs)
+    return f <= f_max
+
+
+def signal_derivative(y, fs, n_periods, period, order=1, f_max=None):
+    """Time derivative of a sampled displacement by the DFT.
+
+    A periodic record (``n_periods > 0``) is differentiated exactly; any
+    other record is extended by its mirror image first so that its ends do
+    not ring.  Bins above ``f_max`` (default: Nyquist) are dropped, which
+    keeps the noise's high-frequency part from dominating accelerations.
+    """
+    y = np.asarray(y, float)
+    n = y.size
+    if n_periods:
+        ext = y
+    else:
+        ext = np.concatenate([y, y[::-1]])
+    spec = np.fft.rfft(ext)
+    w = 2 * np.pi * np.fft.rfftfreq(ext.size, 1 / fs)
+    spec = spec * (1j * w) ** order
+    if f_max is not None:
+        spec[~_band_limit(ext.size, fs, f_max)] = 0
+    if ext.size % 2 == 0:
+        spec[-1] = 0  # the Nyquist bin has no defined derivative
+    return np.fft.irfft(spec, ext.size)[:n]
+
+
+def _content_limit(u_list, y_list, fs):
+    """Highest frequency worth differentiating: three times the input band
+    (harmonics of a nonlinearity) capped at 80 % of Nyquist."""
+    f_in = 0.0
+    for u in u_list:
+        p = np.abs(np.fft.rfft(u - u.mean())) ** 2
+        cum = np.cumsum(p) / max(p.sum(), 1e-300)
+        f_in = max(f_in, np.fft.rfftfreq(u.size, 1 / fs)[np.searchsorted(cum, 0.999)])
+    return min(3 * f_in, 0.4 * fs)
+
+
+def _periods(x, P, period):
+    return x[: P * period].reshape(P, period)
+
+
+def _frequency_analysis(diag, u_list, y_list, y_nominal, n_periods):
+    """Gap spectrum of the periodic validation signals per band and line kind."""
+    period, fs, noise = diag.period_, diag.fs, diag.noise_
+    picks = [i for i, P in enumerate(n_periods) if P]
+    if not picks or noise is None:
+        return None
+    U = np.stack([np.fft.rfft(_periods(u_list[i], n_periods[i], period).mean(0)) for i in picks])
+    E = np.stack([np.fft.rfft(_periods(y_list[i] - y_nominal[i], n_periods[i], period).mean(0))
+                  for i in picks]) / np.sqrt(period)
+    P = np.array([n_periods[i] for i in picks], float)[:, None]
+    lines = excited_lines(U[:, :, None])
+    n_bins = period // 2 + 1
+    kind = np.zeros(n_bins, int)  # 0 DC, 1 excited, 2 odd, 3 even (not excited)
+    kind[1:] = np.where(np.arange(1, n_bins) % 2 == 1, 2, 3)
+    kind[lines] = 1
+    gap_power = np.mean(np.abs(E) ** 2, axis=0)
+    noise_power = np.mean(noise.spectrum[None, :] / P, axis=0)
+    # per line: |E|^2 / (noise / P) is exponential(1) under "no gap"
+    stat = np.abs(E) ** 2 / np.maximum(noise.spectrum[None, :] / P, 1e-300)
+    p_line = stats.gamma.sf(stat.sum(axis=0), a=len(picks))
+    n_tested = n_bins - 1
+    significant = p_line < diag.significance / n_tested
+    significant[0] = False
+    distortion = _distortion_level(diag, n_bins)
+    f = np.fft.rfftfreq(period, 1 / fs)
+    f_hi = _content_limit([u_list[i] for i in picks], None, fs)
+    edges = np.linspace(0, f_hi, N_BANDS + 1)
+    bands = []
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        sel = (f > lo) & (f <= hi)
+        entry = dict(f_lo=float(lo), f_hi=float(hi),
+                     gap_db=_db(gap_power[sel].sum()), noise_db=_db(noise_power[sel].sum()),
+                     distortion_db=None if distortion is None else _db(distortion[sel].sum()),
+                     n_lines=int(sel.sum()), n_significant=int(significant[sel].sum()))
+        bands.append(entry)
+    by_kind = {}
+    names = {1: "excited", 2: "odd_not_excited", 3: "even_not_excited"}
+    for k, name in names.items():
+        sel = kind == k
+        if sel.any():
+            by_kind[name] = dict(n_lines=int(sel.sum()), n_significant=int(significant[sel].sum()),
+                                 gap_db=_db(gap_power[sel].sum()), noise_db=_db(noise_power[sel].sum()))
+    has_detection = (kind[: int(f_hi / fs * period)] > 1).sum() > 0.2 * lines.size
+    return dict(frequency=f, gap_power=gap_power, noise_power=noise_power, distortion_power=distortion,
+                line_kind=kind, significant=significant, bands=bands, line_kinds=by_kind,
+                detection_lines=bool(has_detection))
+
+
+def _distortion_level(diag, n_bins):
+    """Output power of the stochastic nonlinear distortions per bin, from the
+    training realisations around their BLA (None without two realisations
+    of two periods)."""
+    u_list, y_list = diag._train
+    period = diag.period_
+    sel = [i for i, u in enumerate(u_list) if u.size % period == 0 and u.size >= 2 * period]
+    if len(sel) < 2:
+        return None
+    Up = [u_list[i].reshape(-1, period, 1) for i in sel]
+    Yp = [y_list[i].reshape(-1, period, 1) for i in sel]
+    try:
+        bla = periodic_bla(Up, Yp)
+    except ValueError:
+        return None
+    U = np.mean([np.abs(np.fft.rfft(u.mean(0)[:, 0])) ** 2 for u in Up], axis=0) / period
+    out = np.zeros(n_bins)
+    out[bla.lines] = bla.var_nonlinear[:, 0, 0] * len(sel) * U[bla.lines]
+    return out
+
+
+def _db(x):
+    return float(10 * np.log10(max(float(x), 1e-300)))
+
+
+def _amplitude_analysis(diag, u_list, y_list, y_nominal, velocity):
+    """Gap rms against displacement and velocity level (quantile bins)."""
+    e = np.concatenate([a - b for a, b in zip(y_list, y_nominal)])
+    noise_db = _db(diag.noise_.variance) if diag.noise_ is not None else None
+    out = {}
+    for name, x in (("displacement", np.concatenate(y_list)), ("velocity", np.concatenate(velocity))):
+        edges = np.quantile(np.abs(x), np.linspace(0, 1, N_LEVELS + 1))
+        idx = np.clip(np.searchsorted(edges, np.abs(x), side="right") - 1, 0, N_LEVELS - 1)
+        rows = []
+        for b in range(N_LEVELS):
+            m = idx == b
+            rows.append(dict(lo=float(edges[b]), hi=float(edges[b + 1]),
+                             gap_db=_db(np.mean(e[m] ** 2)) if m.any() else None))
+        out[name] = dict(bins=rows, noise_db=noise_db)
+    # Input levels: the relative gap per distinct input rms, training and
+    # validation together (a gap growing with level is nonlinear).
+    levels = []
+    for tag, (us, ys, ns) in (("train", diag._train + (diag._train_nominal,)),
+                              ("validation", (u_list, y_list, y_nominal))):
+        for u, y, yn in zip(us, ys, ns):
+            levels.append(dict(set=tag, input_rms=float(np.sqrt(np.mean(u**2))),
+                               relative_gap_db=_db(np.mean((y - yn) ** 2) / np.mean(y**2))))
+    out["input_levels"] = levels
+    rms = np.array([lv["input_rms"] for lv in levels])
+    out["several_levels"] = bool(rms.max() > 1.2 * rms.min())
+    return out
+
+
+def _force_map(diag, u_list, y_list, n_periods):
+    """Mean missing force over the (displacement, velocity) plane.
+
+    The missing force is what the nominal equation of motion leaves
+    unbalanced along the measured motion: ``u - m ydd - c yd - k y - F(y,
+    yd)`` with the derivatives of the measured displacement (band-limited
+    to where the response has content).  Stateful nominal elements are left
+    out (their states are not measured) and flagged.
+    """
+    fs, period, nom = diag.fs, diag.period_, diag.nominal
+    f_max = _content_limit(u_list, y_list, fs)
+    ys, vs, fm = [], [], []
+    for u, y, P in zip(u_list, y_list, n_periods):
+        if P:  # average the periods first: the noise drops by P
+            u, y = _periods(u, P, period).mean(0), _periods(y, P, period).mean(0)
+        v = signal_derivative(y, fs, P, period, 1, f_max)
+        a = signal_derivative(y, fs, P, period, 2, f_max)
+        yf = signal_derivative(y, fs, P, period, 0, f_max)
+        trim = slice(None) if P else slice(y.size // 50, y.size - y.size // 50)  # ringing ends
+        fm.append((u - nom.mass * a - nom.restoring_force(yf, v))[trim])
+        ys.append(yf[trim])
+        vs.append(v[trim])
+    y, v, f = map(np.concatenate, (ys, vs, fm))
+    y_edges = np.linspace(y.min(), y.max(), MAP_BINS + 1)
+    v_edges = np.linspace(v.min(), v.max(), MAP_BINS + 1)
+    iy = np.clip(np.searchsorted(y_edges, y, side="right") - 1, 0, MAP_BINS - 1)
+    iv = np.clip(np.searchsorted(v_edges, v, side="right") - 1, 0, MAP_BINS - 1)
+    total = np.zeros((MAP_BINS, MAP_BINS))
+    count = np.zeros((MAP_BINS, MAP_BINS))
+    np.add.at(total, (iy, iv), f)
+    np.add.at(count, (iy, iv), 1)
+    force = np.where(count >= MIN_PER_CELL, total / np.maximum(count, 1), np.nan)
+    return dict(displacement_edges=y_edges, velocity_edges=v_edges, force=force, count=count,
+                missing_force_rms=float(np.sqrt(np.mean(f**2))),
+                stateful_nominal_left_out=bool(any(e.n_states for e in nom.forces)),
+                samples=dict(displacement=y, velocity=v, force=f))
+
+
+def _time_analysis(diag, u_list, y_list, y_nominal, n_periods):
+    """Gap over time: along sweeps (against the instantaneous frequency of
+    the input) and from period to period of the training signals (drift)."""
+    fs, period = diag.fs, diag.period_
+    sweeps = []
+    for i, (u, y, yn, P) in enumerate(zip(u_list, y_list, y_nominal, n_periods)):
+        if P or u.size < 4 * N_WINDOWS:
+            continue
+        phase = np.unwrap(np.angle(hilbert(u - u.mean())))
+        inst_f = np.gradient(phase) * fs / (2 * np.pi)
+        edges = np.linspace(0, u.size, N_WINDOWS + 1).astype(int)
+        rows = []
+        for a, b in zip(edges[:-1], edges[1:]):
+            rows.append(dict(t=float((a + b) / 2 / fs), frequency=float(np.median(inst_f[a:b])),
+                             gap_db=_db(np.mean((y[a:b] - yn[a:b]) ** 2)),
+                             output_db=_db(np.mean(y[a:b] ** 2))))
+        sweeps.append(dict(signal=i, windows=rows))
+    # Drift: how much the measured response changes from the first period,
+    # against what noise alone gives (2 sigma^2 per sample).
+    drift = None
+    u_tr, y_tr = diag._train
+    changes = []
+    for y in y_tr:
+        if period and y.size % period == 0 and y.size >= 3 * period:
+            Yp = _periods(y, y.size // period, period)
+            changes.append([np.mean((Yp[p] - Yp[0]) ** 2) for p in range(1, Yp.shape[0])])
+    if changes and diag.noise_ is not None:
+        width = min(len(c) for c in changes)
+        mean_change = np.mean([c[:width] for c in changes], axis=0)
+        ratio = mean_change / (2 * diag.noise_.variance)
+        slope = np.polyfit(np.arange(1, width + 1), ratio, 1)[0] if width > 1 else 0.0
+        drift = dict(change_vs_noise_db=[_db(r) for r in ratio], slope_per_period=float(slope),
+                     drifting=bool(ratio[-1] > 2.0))
+    return dict(sweeps=sweeps, drift=drift)
+
+
+def locate_gap(diag, u_list, y_list, y_nominal, n_periods):
+    """The "where" analysis of a :class:`GapDiagnosis` on validation signals.
+
+    Returns
+    -------
+    where : dict
+        ``frequency`` (bands, line kinds, per-line significance; None
+        without periodic validation signals or noise floor), ``amplitude``
+        (gap per displacement / velocity level, per input level),
+        ``state_plane`` (missing-force map) and ``time`` (sweeps, drift).
+    """
+    f_max = _content_limit(u_list, y_list, diag.fs)
+    velocity = [signal_derivative(y, diag.fs, P, diag.period_, 1, f_max) for y, P in zip(y_list, n_periods)]
+    return dict(
+        frequency=_frequency_analysis(diag, u_list, y_list, y_nominal, n_periods),
+        amplitude=_amplitude_analysis(diag, u_list, y_list, y_nominal, velocity),
+        state_plane=_force_map(diag, u_list, y_list, n_periods),
+        time=_time_analysis(diag, u_list, y_list, y_nominal, n_periods),
+        velocity=velocity,
+    )
