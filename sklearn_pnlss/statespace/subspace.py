@@ -9,8 +9,8 @@ non-parametric noise models", Automatica 38(8).
 """
 import numpy as np
 from scipy.linalg import qr, sqrtm, svd
-from scipy.optimize import least_squares
 
+from .levenberg_marquardt import levenberg_marquardt
 from .linear import is_stable, stabilize
 
 __all__ = ["fd_subspace", "fd_refine", "frf_weights"]
@@ -134,26 +134,35 @@ def _pack(A, B, C, D, estimate_d):
 
 
 def _unpack(theta, n, m, p, estimate_d):
-    i = 0
-    A = theta[i : i + n * n].reshape(n, n); i += n * n
-    B = theta[i : i + n * m].reshape(n, m); i += n * m
-    C = theta[i : i + p * n].reshape(p, n); i += p * n
-    D = theta[i : i + p * m].reshape(p, m) if estimate_d else np.zeros((p, m))
+    i, j, k = n * n, n * n + n * m, n * n + n * m + p * n
+    A = theta[:i].reshape(n, n)
+    B = theta[i:j].reshape(n, m)
+    C = theta[j:k].reshape(p, n)
+    D = theta[k : k + p * m].reshape(p, m) if estimate_d else np.zeros((p, m))
     return A, B, C, D
 
 
-def fd_refine(A, B, C, D, G, z, *, var=None, estimate_d=True, max_nfev=200):
+def fd_refine(A, B, C, D, G, z, *, var=None, estimate_d=True, max_iter=100):
     """Refine a linear model by weighted least squares on the FRF.
 
-    Minimises ``sum_k |G_model(z_k) - G_k|^2 / sigma_k^2`` over all entries of
-    A, B, C, D (the redundant similarity directions are harmless to the
-    trust-region solver). A refined model that is unstable or fits worse is
+    Minimises ``sum_k |G_model(z_k) - G_k|^2 / sigma_k^2`` over A, B, C, D by
+    the library's Levenberg-Marquardt (Jacobian columns scaled to unit rms,
+    the ``n^2`` smallest singular values dropped from each step). The
+    dropped directions are those of the state basis, which leave the FRF
+    unchanged; a solver that keeps them (a trust region on all entries)
+    drifts along them by amounts set by rounding, so the basis of its result,
+    and every nonlinear fit started from it, changed when the data were
+    rescaled. With them dropped the steps are continuous in the data and
+    rescaling the input or output only rescales B and D. LM stops when a
+    step lowers the cost by less than 1e-8 of it, or after ``max_iter``
+    Jacobian evaluations. A refined model that is unstable or fits worse is
     discarded and the start returned.
 
     Returns
     -------
     A, B, C, D : ndarray
     """
+    G = np.asarray(G, dtype=complex)
     K, p, m = G.shape
     n = A.shape[0]
     w = frf_weights(G, var)
@@ -181,22 +190,23 @@ def fd_refine(A, B, C, D, G, z, *, var=None, estimate_d=True, max_nfev=200):
         E = E.ravel()
         return np.concatenate([E.real, E.imag]), np.concatenate([J.real, J.imag])
 
+    def residual(theta):
+        with np.errstate(all="ignore"):
+            try:
+                return residual_and_jac(theta)[0]
+            except np.linalg.LinAlgError:  # a pole exactly on an excited line
+                return None
+
+    def normal_equations(theta):
+        e, J = residual_and_jac(theta)
+        return J.T @ J, J.T @ e
+
     theta0 = _pack(A, B, C, D, estimate_d)
-    cache = {}
-
-    def fun(theta):
-        cache["rj"] = residual_and_jac(theta)
-        cache["theta"] = theta.copy()
-        return cache["rj"][0]
-
-    def jac(theta):
-        if "theta" not in cache or not np.array_equal(cache["theta"], theta):
-            fun(theta)
-        return cache["rj"][1]
-
-    cost0 = np.sum(fun(theta0) ** 2)
-    sol = least_squares(fun, theta0, jac=jac, method="trf", x_scale="jac", max_nfev=max_nfev)
-    A1, B1, C1, D1 = _unpack(sol.x, n, m, p, estimate_d)
-    if not np.all(np.isfinite(sol.x)) or not is_stable(A1) or 2 * sol.cost > cost0:
+    e0 = residual(theta0)
+    if e0 is None or not np.all(np.isfinite(e0)):
+        return A, B, C, D
+    result = levenberg_marquardt(residual, normal_equations, theta0, n_drop=n * n, max_iter=max_iter, tol=1e-8)
+    A1, B1, C1, D1 = _unpack(result.theta, n, m, p, estimate_d)
+    if not is_stable(A1) or result.cost > e0 @ e0:
         return A, B, C, D
     return A1, B1, C1, D1
