@@ -7,6 +7,7 @@ listed starting points.  A start or trial point whose simulation diverges or
 is not physical gets a large residual, so the trust region shrinks away from
 it; it is never returned.
 """
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -39,6 +40,8 @@ class EffectFit:
         Simulations of the training set used.
     converged : bool
     message : str
+    seconds : float
+        Wall time of the fit.
     """
 
     effect: object
@@ -48,6 +51,7 @@ class EffectFit:
     n_evaluations: int
     converged: bool
     message: str
+    seconds: float = 0.0
 
 
 def with_recalibration(effect, recalibration):
@@ -154,6 +158,7 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
     -------
     EffectFit
     """
+    start = time.perf_counter()
     obj = _Objective(effect, nominal, scales, signals, y_meas)
     lower, upper = effect.bounds
     starts = [np.clip(s, lower, upper) for s in effect.starts]
@@ -183,4 +188,5 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
     r = obj(theta)
     mse = float(np.mean(r**2)) * scales.displacement**2
     _, _, physical = effect_model(effect, theta, nominal, scales)
-    return EffectFit(effect, theta, physical, mse, n_evaluations, bool(converged), str(message))
+    return EffectFit(effect, theta, physical, mse, n_evaluations, bool(converged), str(message),
+                     time.perf_counter() - start)

@@ -132,9 +132,12 @@ def decide(fits, y_meas, y_nominal, y_effects, y_black_box, noise, significance)
 
     bb_gap = bb_closure = float("nan")
     if y_black_box is not None:
-        bb_after = np.array([_mse(m, s) for m, s in zip(y_meas, y_black_box)])
-        bb_gap = float(np.mean([_db(a) for a in bb_after]))
-        bb_closure = closure(bb_after)
+        bb_after = np.array([np.inf if s is None else _mse(m, s) for m, s in zip(y_meas, y_black_box)])
+        if np.all(np.isfinite(bb_after)):
+            bb_gap = float(np.mean([_db(a) for a in bb_after]))
+            bb_closure = closure(bb_after)
+        else:  # diverged on a validation signal: no yardstick
+            bb_gap, bb_closure = float("inf"), -np.inf
 
     gap_before_db = float(np.mean([_db(b) for b in before]))
     common = dict(ranking=ranking, gap_before_db=gap_before_db,

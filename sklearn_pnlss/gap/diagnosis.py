@@ -11,7 +11,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from ..physics.oscillator import Oscillator
 from ..utils.validation import as_signal_list, check_period
-from .black_box import fit_black_box
+from .black_box import branch_opinions, fit_black_box
 from .calibrate import fit_effect, with_recalibration
 from .decision import decide
 from .effects import Scales, default_effects, make_effect
@@ -101,6 +101,9 @@ class GapDiagnosis(BaseEstimator):
     fits_ : list of EffectFit
         The fitted candidates, in the order of ``effects``.
     black_box_ : DecoupledPNLSSRegressor or None
+    black_box_branches_ : list of dict
+        Reading of each black-box branch on the training signals (see
+        :func:`sklearn_pnlss.gap.black_box.branch_opinions`).
     train_gap_db_ : float
         Mean square training gap of the nominal simulator, dB.
     fit_time_ : float
@@ -205,8 +208,9 @@ class GapDiagnosis(BaseEstimator):
 
         y_all = np.concatenate(y_list)
         u_all = np.concatenate(u_list)
-        velocity = np.concatenate([signal_derivative(yy, self.fs, P, self.period)
-                                   for yy, P in zip(y_list, train.n_periods)])
+        velocity_list = [signal_derivative(yy, self.fs, P, self.period)
+                         for yy, P in zip(y_list, train.n_periods)]
+        velocity = np.concatenate(velocity_list)
         if np.std(u_all) == 0 or np.std(y_all) == 0:
             raise ValueError("X and y must not be constant: a diagnosis needs an excited response.")
         self.scales_ = Scales(
@@ -231,14 +235,26 @@ class GapDiagnosis(BaseEstimator):
         )
         for f in self.fits_:
             self._log(f"{f.effect.name}: training {10 * np.log10(f.train_mse):.2f} dB, "
-                      f"{f.n_evaluations} simulations")
-        self.black_box_ = None
+                      f"{f.n_evaluations} simulations, {f.seconds:.1f} s")
+        self.black_box_, self.black_box_branches_ = None, []
         if self.black_box:
             self.black_box_ = fit_black_box(u_list, y_list, self.period, self.random_state, self.n_jobs)
+        if self.black_box_ is not None:
+            # Read on the training signals: the branches' own range.
+            self.black_box_branches_ = branch_opinions(self.black_box_, u_list, y_list, velocity_list,
+                                                       self.scales_)
         self._train = (u_list, y_list)
         self._train_nominal = y_nominal
         self.fit_time_ = time.perf_counter() - start
         return self
+
+    def _black_box_predict(self, u):
+        """The black box's simulation of one signal; None where it leaves its
+        fitted range and diverges (a black box extrapolates poorly)."""
+        try:
+            return np.asarray(self.black_box_.predict(u[:, None]))[:, 0]
+        except ValueError:
+            return None
 
     def report(self, X_val, y_val):
         """Score the candidates on validation signals and explain the gap.
@@ -269,11 +285,11 @@ class GapDiagnosis(BaseEstimator):
 
         y_effects = Parallel(n_jobs=self.n_jobs, prefer="threads")(
             delayed(simulate_fit)(f) for f in self.fits_)
-        y_black_box = None if self.black_box_ is None else self.black_box_.predict(
-            [u[:, None] for u in u_list])
-        if y_black_box is not None:
-            y_black_box = [np.asarray(p)[:, 0] for p in y_black_box]
+        y_black_box = None
+        if self.black_box_ is not None:
+            y_black_box = [self._black_box_predict(u) for u in u_list]
         decision = decide(self.fits_, y_list, y_nominal, y_effects, y_black_box, self.noise_,
                           self.significance)
         where = locate_gap(self, u_list, y_list, y_nominal, val.n_periods)
-        return GapReport.build(self, decision, where, u_list, y_list, where["velocity"])
+        return GapReport(decision=decision, where=where, scales=self.scales_, noise=self.noise_,
+                         black_box=self.black_box_, fits=self.fits_, opinions=self.black_box_branches_)

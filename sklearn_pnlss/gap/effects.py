@@ -233,7 +233,7 @@ def _built_in():
         "input delayed by a (fractional) time")
     add("second_mode", ("m2", "c2", "k2"),
         [[0.2, r, 0.02] for r in (0.5, 0.8, 1.25, 2.0, 3.0)],
-        _box((1e-3, 5.0), (0.05, 20.0), (1e-4, 1.0)), _second_mode,
+        _box((1e-3, 5.0), (0.05, 20.0), (1e-3, 1.0)), _second_mode,
         "a second mass coupled by a spring and a damper")
     add("stiffness_drift", ("rate",), *_single(-1.0, 1.0), _drift,
         "stiffness changing linearly over time")

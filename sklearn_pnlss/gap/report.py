@@ -1,15 +1,13 @@
 """The diagnosis report: verdict, ranking, where the gap lies, figures."""
 import numpy as np
 
-from .black_box import branch_opinions
-
 __all__ = ["GapReport"]
 
 
 def _plain(x):
     """JSON-ready copy: arrays to lists, numpy scalars to floats."""
     if isinstance(x, dict):
-        return {k: _plain(v) for k, v in x.items() if k not in ("samples", "velocity")}
+        return {k: _plain(v) for k, v in x.items() if k != "samples"}
     if isinstance(x, (list, tuple)):
         return [_plain(v) for v in x]
     if isinstance(x, np.ndarray):
@@ -66,14 +64,6 @@ class GapReport:
             self.black_box = dict(gap_after_db=decision.black_box_gap_db,
                                   closure=decision.black_box_closure,
                                   n_params=int(black_box.n_params_), branches=opinions or [])
-
-    @classmethod
-    def build(cls, diag, decision, where, u_list, y_list, velocity):
-        opinions = None
-        if diag.black_box_ is not None:
-            opinions = branch_opinions(diag.black_box_, u_list, y_list, velocity, diag.scales_)
-        return cls(decision=decision, where=where, scales=diag.scales_, noise=diag.noise_,
-                   black_box=diag.black_box_, fits=diag.fits_, opinions=opinions)
 
     # ------------------------------------------------------------------
     def to_dict(self):

@@ -138,6 +138,18 @@ def _continuation_state(osc, frozen_state):
     return state
 
 
+# Steady state: settled when a period ends within this fraction of its peak
+# state of where it started (noise sits near 1e-2), and at most this many
+# periods, so that a lightly damped trial point cannot stall a fit.
+STEADY_TOL = 1e-9
+MAX_PERIODS = 30
+
+
+def _steady(osc, u_fine, fs_fine):
+    return osc.simulate_fine(u_fine, fs=fs_fine, periodic=True, tol=STEADY_TOL, max_periods=MAX_PERIODS,
+                             warn=False)
+
+
 def _fine_response(osc, u_fine, P, fs_fine, transform):
     """Displacement at the integration rate over the whole signal."""
     periodic = P > 0
@@ -146,8 +158,8 @@ def _fine_response(osc, u_fine, P, fs_fine, transform):
     if not periodic:
         return osc.simulate_fine(u_fine, fs=fs_fine, periodic=False).y
     if not osc.time_varying:
-        return np.tile(osc.simulate_fine(u_fine, fs=fs_fine, periodic=True).y, P)
-    start = _frozen(osc).simulate_fine(u_fine, fs=fs_fine, periodic=True).final_state
+        return np.tile(_steady(osc, u_fine, fs_fine).y, P)
+    start = _steady(_frozen(osc), u_fine, fs_fine).final_state
     return osc.simulate_fine(np.tile(u_fine, P), fs=fs_fine, periodic=False,
                              initial_state=_continuation_state(osc, start)).y
 

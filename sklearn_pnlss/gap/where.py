@@ -258,5 +258,4 @@ def locate_gap(diag, u_list, y_list, y_nominal, n_periods):
         amplitude=_amplitude_analysis(diag, u_list, y_list, y_nominal, velocity),
         state_plane=_force_map(diag, u_list, y_list, n_periods),
         time=_time_analysis(diag, u_list, y_list, y_nominal, n_periods),
-        velocity=velocity,
     )

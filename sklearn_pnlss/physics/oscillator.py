@@ -220,7 +220,7 @@ class Oscillator:
         return y, yd, z, int(n_failed)
 
     def simulate_fine(self, u_fine, *, fs, periodic, tol=1e-12, max_periods=200,
-                      initial_state=None):
+                      initial_state=None, warn=True):
         """Simulate at the integration rate and return all states.
 
         Parameters
@@ -248,6 +248,9 @@ class Oscillator:
             next period (it holds the same oscillator's layout of
             displacement, velocity, acceleration and internal states);
             ``periodic`` must then be False.
+        warn : bool, default=True
+            Warn when the steady state is not reached (callers that check
+            ``n_periods`` themselves turn it off).
 
         Returns
         -------
@@ -297,7 +300,7 @@ class Oscillator:
             if period > 1 and self._settled(start, state, y, yd, z, tol):
                 converged = True
                 break
-        if not converged:
+        if not converged and warn:
             warnings.warn(
                 f"periodic steady state not reached within max_periods={max_periods} "
                 f"periods (tolerance {tol:g}); the last period is returned.",

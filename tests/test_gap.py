@@ -1,0 +1,191 @@
+"""Sim-to-real gap diagnosis on small data whose missing effect is known."""
+import json
+
+import numpy as np
+import pytest
+
+from sklearn_pnlss.gap import GapDiagnosis, default_effects
+from sklearn_pnlss.gap.simulate import SignalSet, prime_factors, simulate_signals
+from sklearn_pnlss.physics import (
+    CubicStiffness,
+    Oscillator,
+    QuadraticDamping,
+    StiffnessDrift,
+)
+from sklearn_pnlss.signals import linear_chirp, multisine
+
+FS, N = 750.0, 1024
+NOMINAL = Oscillator(2.0, 10.0, 5e4)
+FAST = dict(fs=FS, period=N, oversampling=10, fit_oversampling=5, black_box=False)
+
+
+def _data(real, seed=0, n_periods=2, noise=2e-6):
+    X, _ = multisine(N, fs=FS, f_band=(5.0, 150.0), rms=50.0, n_periods=n_periods, n_realizations=3,
+                     random_state=seed)
+    sweep = linear_chirp(np.arange(3000) / FS, f_start=15.0, rate=8.0, amplitude=10.0)
+    train = SignalSet.from_signals([x[:, 0] for x in X[:2]], N, FS, 10)
+    val = SignalSet.from_signals([X[2, :N, 0], sweep], N, FS, 10)
+    rng = np.random.RandomState(seed)
+    y_train = simulate_signals(real, train, noise_rms=noise, random_state=rng)
+    y_val = simulate_signals(real, val, noise_rms=noise, random_state=rng)
+    return train.u, y_train, val.u, y_val
+
+
+@pytest.fixture(scope="module")
+def cubic_case():
+    real = NOMINAL.with_forces([CubicStiffness(1e8)])
+    u, y, u_val, y_val = _data(real)
+    diag = GapDiagnosis(NOMINAL, effects=["cubic_stiffness", "quadratic_damping", "recalibration"],
+                        **FAST).fit(u, y)
+    return diag, diag.report(u_val, y_val)
+
+
+def test_default_effects_are_the_documented_ones():
+    assert default_effects() == [
+        "hysteresis", "cubic_stiffness", "quadratic_stiffness", "coulomb_friction", "quadratic_damping",
+        "backlash", "input_saturation", "input_delay", "second_mode", "stiffness_drift", "recalibration",
+    ]
+
+
+def test_prime_factor_chain():
+    assert prime_factors(20) == (2, 2, 5)
+    assert prime_factors(7) == (7,)
+
+
+def test_cubic_stiffness_is_found_and_recovered(cubic_case):
+    diag, report = cubic_case
+    assert report.best_effect == "cubic_stiffness"
+    best = report.ranking[0]
+    assert best.name == "cubic_stiffness"
+    assert best.params["k3"] == pytest.approx(1e8, rel=0.01)
+    # the gap closes down to the noise floor: within 1 dB of it
+    assert best.closure > 0.98
+    assert best.gap_after_db < report.noise_floor_db + 1.0
+    assert best.shrink_db > 20
+    # the other candidates explain far less
+    others = {r.name: r.closure for r in report.ranking[1:]}
+    assert max(others.values()) < 0.8
+
+
+def test_noise_floor_is_the_simulated_noise(cubic_case):
+    diag, _ = cubic_case
+    # 2e-6 m rms at the integration rate, band-limited and decimated
+    assert 1.0e-6 < diag.noise_.rms < 2.1e-6
+
+
+def test_where_the_gap_lies(cubic_case):
+    _, report = cubic_case
+    freq = report.where["frequency"]
+    bands = freq["bands"]
+    # a stiffness nonlinearity shows where the response is large: around the
+    # 25 Hz resonance, far above the noise there
+    worst = max(bands, key=lambda b: b["gap_db"] - b["noise_db"])
+    assert worst["f_lo"] <= 25.2 <= worst["f_hi"]
+    assert worst["n_significant"] > 0.5 * worst["n_lines"]
+    fmap = report.where["state_plane"]
+    finite = np.isfinite(fmap["force"])
+    assert finite.sum() > 20
+    # the missing force k3 y^3 is odd in displacement: the map's mean force at
+    # the largest displacements has the sign of y and about its size
+    y_mid = 0.5 * (fmap["displacement_edges"][1:] + fmap["displacement_edges"][:-1])
+    rows = np.isfinite(fmap["force"]).any(axis=1)
+    col = np.full(rows.size, np.nan)
+    col[rows] = np.nanmean(fmap["force"][rows], axis=1)
+    ok = np.isfinite(col)
+    slope = np.polyfit(y_mid[ok] ** 3, col[ok], 1)[0]
+    assert slope == pytest.approx(1e8, rel=0.3)
+    sweep = report.where["time"]["sweeps"][0]["windows"]
+    assert sweep[0]["frequency"] == pytest.approx(15.0, abs=2.0)
+
+
+def test_report_text_dict_and_plot(cubic_case):
+    _, report = cubic_case
+    text = str(report)
+    assert "verdict: cubic_stiffness" in text and "k3 = " in text
+    d = report.to_dict()
+    json.dumps(d)  # plain types only
+    assert d["best_effect"] == "cubic_stiffness"
+    assert d["ranking"][0]["params"]["k3"] == pytest.approx(1e8, rel=0.01)
+    import matplotlib
+
+    matplotlib.use("Agg")
+    fig = report.plot()
+    assert len(fig.axes) >= 6
+    bars = fig.axes[0].patches
+    assert len(bars) == len(report.ranking)
+
+
+def test_no_false_alarm_without_gap():
+    u, y, u_val, y_val = _data(NOMINAL, seed=3)
+    report = GapDiagnosis(NOMINAL, effects=["cubic_stiffness", "recalibration"], **FAST).fit(u, y).report(
+        u_val, y_val)
+    assert report.best_effect is None and not report.significant
+    assert abs(report.gap_db - report.noise_floor_db) < 0.5
+
+
+def test_parameter_error_is_recalibration():
+    real = Oscillator(2.0, 10.0, 1.05 * 5e4)
+    u, y, u_val, y_val = _data(real, seed=4)
+    report = GapDiagnosis(NOMINAL, effects=["cubic_stiffness", "recalibration"], **FAST).fit(u, y).report(
+        u_val, y_val)
+    assert report.best_effect == "recalibration"
+    recal = next(r for r in report.ranking if r.name == "recalibration")
+    assert recal.params["stiffness"] == pytest.approx(1.05 * 5e4, rel=1e-3)
+
+
+def test_missing_candidate_is_unexplained():
+    real = NOMINAL.with_forces([QuadraticDamping(15.0)])
+    u, y, u_val, y_val = _data(real, seed=5)
+    report = GapDiagnosis(NOMINAL, effects=["quadratic_stiffness", "input_delay"], **FAST).fit(u, y).report(
+        u_val, y_val)
+    assert report.best_effect == "unexplained"
+    assert report.significant
+
+
+def test_user_force_element_is_a_candidate():
+    real = NOMINAL.with_forces([QuadraticDamping(15.0)])
+    u, y, u_val, y_val = _data(real, seed=6)
+    report = GapDiagnosis(NOMINAL, effects=["cubic_stiffness", QuadraticDamping(5.0)], **FAST).fit(u, y).report(
+        u_val, y_val)
+    assert report.best_effect == "QuadraticDamping"
+    assert report.ranking[0].params["c2"] == pytest.approx(15.0, rel=0.02)
+
+
+def test_drift_periods_continue_from_the_initial_steady_state():
+    """A drifting structure's periods differ; without drift they repeat."""
+    X, _ = multisine(N, fs=FS, rms=50.0, n_periods=3, n_realizations=1, random_state=0)
+    sig = SignalSet.from_signals([X[0, :, 0]], N, FS, 10)
+    still = simulate_signals(NOMINAL, sig)[0].reshape(3, N)
+    np.testing.assert_allclose(still[1], still[0])
+    drifting = simulate_signals(NOMINAL.with_forces([StiffnessDrift(-500.0)]), sig)[0].reshape(3, N)
+    # the first samples continue the steady state of the undrifted structure
+    assert np.max(np.abs(drifting[0, :20] - still[0, :20])) < 1e-3 * np.abs(still).max()
+    change = [np.sqrt(np.mean((drifting[p] - still[p]) ** 2)) for p in range(3)]
+    assert change[0] < change[1] < change[2]
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(effects=["no_such_effect"]), "unknown effect"),
+    (dict(effects=["cubic_stiffness", "cubic_stiffness"]), "twice"),
+    (dict(effects=[]), "empty"),
+    (dict(effects=[3.0]), "ForceElement"),
+])
+def test_bad_effects(kwargs, match):
+    u, y, _, _ = _data(NOMINAL, seed=1, noise=0.0)
+    with pytest.raises((ValueError, TypeError), match=match):
+        GapDiagnosis(NOMINAL, **{**FAST, **kwargs}).fit(u, y)
+
+
+def test_bad_signals():
+    u, y, _, _ = _data(NOMINAL, seed=1, noise=0.0)
+    diag = GapDiagnosis(NOMINAL, effects=["cubic_stiffness"], **FAST)
+    with pytest.raises(ValueError, match="one channel"):
+        diag.fit([np.column_stack([u[0], u[0]])], [y[0]])
+    with pytest.raises(ValueError, match="samples"):
+        diag.fit([u[0]], [y[0][:-1]])
+    with pytest.raises(ValueError, match="signals"):
+        diag.fit(u, y[:1])
+    with pytest.raises(ValueError, match="constant"):
+        diag.fit([np.zeros(N)], [np.zeros(N)])
+    with pytest.raises(ValueError, match="NaN"):
+        diag.fit([np.full(N, np.nan)], [y[0][:N]])
