@@ -25,9 +25,9 @@ def fit_black_box(u_list, y_list, period, random_state, n_jobs):
     X = [u[:, None] for u in u_list]
     y = [v[:, None] for v in y_list]
     start = PNLSSRegressor(N_STATES, degrees=(2, 3), variables="states_inputs", period=period,
-                           max_iter=40, random_state=random_state)
+                           max_iter=30, random_state=random_state)
     model = DecoupledPNLSSRegressor(N_STATES, n_branches=N_BRANCHES, degree=DEGREE, period=period,
-                                    n_init=2, max_iter=40, start_model=start, n_jobs=n_jobs,
+                                    n_init=1, max_iter=30, start_model=start, n_jobs=n_jobs,
                                     random_state=random_state)
     try:
         return model.fit(X, y)
