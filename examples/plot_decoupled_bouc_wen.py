@@ -40,9 +40,8 @@ import numpy as np
 
 from sklearn_pnlss import DecoupledPNLSSRegressor, PNLSSRegressor
 from sklearn_pnlss.datasets import load_bouc_wen_official, make_bouc_wen
-from sklearn_pnlss.decoupling.start import states_inputs_trajectory
 from sklearn_pnlss.metrics import rms_error
-from sklearn_pnlss.plotting import plot_error_spectra, plot_time_errors
+from sklearn_pnlss.plotting import plot_branches, plot_error_spectra, plot_time_errors
 from sklearn_pnlss.utils.handover import attach_stage
 
 data = make_bouc_wen(n_realizations=3, n_periods=2, rms=55.0, random_state=0)
@@ -50,8 +49,10 @@ P, fs = data.period, data.fs
 X_train, y_train = data.X_train[:2], data.y_train[:2]
 X_val, y_val = data.X_train[2:, P:], data.y_train[2:, P:]
 
-data_dir = Path(os.environ.get("SKLEARN_PNLSS_DATA",
-                               Path(__file__).resolve().parents[2] / "shared" / "data" / "bouc_wen"))
+# Run as a script, __file__ locates the repository; sphinx-gallery runs the
+# example from the examples folder, without __file__.
+here = Path(__file__).resolve().parent if "__file__" in globals() else Path.cwd()
+data_dir = Path(os.environ.get("SKLEARN_PNLSS_DATA", here.parents[1] / "shared" / "data" / "bouc_wen"))
 try:
     test = load_bouc_wen_official(data_dir)
     print(f"test signals: official benchmark files from {data_dir}")
@@ -222,24 +223,11 @@ plt.tight_layout()
 # ----------------------------------
 # Each ``g_l`` over its branch input ``z_l = V[:, l]^T [x; u]`` on the
 # training range (``branch_values()``), with the points where it is evaluated
-# when the model simulates the test multisine. The states are the model's
-# own, in its internal normalised units (``_model``, ``_u_scale``), where
-# ``z`` takes the same values. The branches are smooth and nearly odd, as is
-# the benchmark's hysteretic nonlinearity.
-s = states_inputs_trajectory(best._model, [X_ms[0] / best._u_scale], P)  # [x; u] along the simulation
-z_test = s @ best._model.V
-z_grid, g_grid = best.branch_values()
-_, g_test = best.branch_values(z_test)
-fig, axes = plt.subplots(1, best.n_branches, figsize=(3.5 * best.n_branches, 3.5), squeeze=False)
-for k, ax in enumerate(axes[0]):
-    ax.plot(z_test[:, k], g_test[:, k], ".", color="C1", ms=1, label="test multisine")
-    ax.plot(z_grid[:, k], g_grid[:, k], "k", lw=1.2, label="g over training range")
-    ax.set_xlabel(f"z_{k + 1}")
-    ax.set_ylabel(f"g_{k + 1}(z_{k + 1})")
-    ax.set_title(f"branch {k + 1}")
-    ax.grid(alpha=0.3)
-axes[0, 0].legend(fontsize=8, markerscale=6)
-fig.suptitle(f"Branches of the {best_name} model")
+# when the model simulates the test multisine (``branch_inputs()``). The
+# branches are smooth and nearly odd, as is the benchmark's hysteretic
+# nonlinearity.
+axes = plot_branches(best, X_ms)
+axes[0].figure.suptitle(f"Branches of the {best_name} model")
 plt.tight_layout()
 
 plt.show()

@@ -32,7 +32,6 @@ uses full-length records (see ``benchmarks/gap_withheld.py``).
 # at 750 Hz) for training, measured with the benchmark's noise; for
 # validation, a new multisine period and a short swept sine from rest.
 import matplotlib.pyplot as plt
-import numpy as np
 
 from sklearn_pnlss.datasets import make_bouc_wen, simulate_bouc_wen
 from sklearn_pnlss.gap import GapDiagnosis

@@ -15,7 +15,7 @@ from .decoupling.start import nonlinear_jacobian_tensor, states_inputs_trajector
 from .metrics import rms_error
 from .utils.validation import as_signal_list, validate_signals
 
-__all__ = ["cpd_rank_scan", "held_out_signals", "mean_rms_db_scorer"]
+__all__ = ["cpd_rank_scan", "held_out_signals", "mean_rms_db_scorer", "n_nonlinear_params_scorer"]
 
 
 def held_out_signals(X_train, y_train, X_test, y_test):
@@ -73,6 +73,27 @@ def mean_rms_db_scorer(estimator, X, y):
     X_list, _ = as_signal_list(X, name="X")
     pred = estimator.predict(X_list)
     return -float(np.mean([rms_error(t, p, db=True) for t, p in zip(y_list, pred)]))
+
+
+def n_nonlinear_params_scorer(estimator, X=None, y=None):
+    """Not a score: the number of nonlinear parameters of the fitted model
+    (of a Pipeline's last step), for ``GridSearchCV`` to record beside the
+    error.
+
+    Pass it as a second metric, ``scoring={"db": mean_rms_db_scorer,
+    "n_nonlinear_params": n_nonlinear_params_scorer}`` with ``refit=False``
+    (or ``refit="db"``); ``cv_results_["mean_test_n_nonlinear_params"]``
+    then holds each candidate's parameter count, to plot the error against
+    the model size (:func:`~sklearn_pnlss.plotting.plot_grid_search`).
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> n_nonlinear_params_scorer(SimpleNamespace(n_nonlinear_params_=51))
+    51.0
+    """
+    final = estimator[-1] if hasattr(estimator, "steps") else estimator
+    return float(getattr(final, "n_nonlinear_params_", 0))
 
 
 def cpd_rank_scan(pnlss, X, ranks=range(1, 9), *, n_points=500, n_init=3, random_state=None):

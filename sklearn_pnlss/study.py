@@ -16,8 +16,9 @@ import numpy as np
 
 from .metrics import rms_error
 
-__all__ = ["run_study", "main"]
+__all__ = ["MODELS", "format_grid", "format_table", "main", "run_study"]
 
+#: The models the study can fit, in the order they are fitted.
 MODELS = ("bla", "pnlss", "pnlss_si", "decoupled")
 
 
@@ -55,38 +56,69 @@ def _score(model, X, y):
     return rms, 20 * np.log10(rms), y_pred
 
 
-def _fit_models(names, data, verbose):
+def _fit_models(names, data, *, grid, n_init, n_jobs, max_iter, steps):
     """Fit the requested models; the decoupled model starts from the
-    states-and-input PNLSS (fitted here if not requested on its own) and
-    keeps the start best on the validation realisation."""
+    states-and-input PNLSS (fitted here if not requested on its own), keeps
+    the start best on the validation realisation, and, when ``grid`` holds
+    several (branches, degree) candidates, is the candidate best on it.
+
+    Returns ``{name: (model, fit_time)}`` and the grid rows (empty without a
+    decoupled model)."""
     from .estimators import BLAEstimator, DecoupledPNLSSRegressor, PNLSSRegressor
     from .utils.handover import attach_stage
 
     P = data.period
+
+    def iterations(default):
+        return default if max_iter is None else max_iter
+
     make = {
         "bla": lambda: BLAEstimator(n_states=3, period=P, fs=data.fs),
         # Noel et al. 2017: states only, degrees 2-3, 64 parameters.
-        "pnlss": lambda: PNLSSRegressor(3, degrees=(2, 3), variables="states", period=P, max_iter=40, verbose=verbose),
+        "pnlss": lambda: PNLSSRegressor(3, degrees=(2, 3), variables="states", period=P, max_iter=iterations(40),
+                                        linear_model=BLAEstimator(3, period=P, fs=data.fs)),
         # The seed paper's start: states and input, degrees 2-3, 90 nonlinear parameters.
-        "pnlss_si": lambda: PNLSSRegressor(3, degrees=(2, 3), variables="states_inputs", period=P, max_iter=200,
-                                           verbose=verbose),
-        # The seed paper's pick: 3 branches of degree 10, 51 nonlinear parameters.
-        "decoupled": lambda: DecoupledPNLSSRegressor(3, n_branches=3, degree=10, period=P, n_init=5, n_jobs=-1,
-                                                     random_state=0, verbose=verbose),
+        "pnlss_si": lambda: PNLSSRegressor(3, degrees=(2, 3), variables="states_inputs", period=P,
+                                           max_iter=iterations(200), linear_model=BLAEstimator(3, period=P, fs=data.fs)),
     }
-    fitted = {}
+    fitted, grid_rows = {}, []
     for name in [n for n in MODELS if n in names or (n == "pnlss_si" and "decoupled" in names)]:
-        model = make[name]()
-        t0 = time.perf_counter()
         if name == "decoupled":
-            start = fitted["pnlss_si"][0]
-            model.fit(attach_stage(data.X_train, start), data.y_train, X_val=data.X_val, y_val=data.y_val)
-            fit_time = time.perf_counter() - t0 + fitted["pnlss_si"][1]
-        else:
-            model.fit(data.X_train, data.y_train)
-            fit_time = time.perf_counter() - t0
-        fitted[name] = (model, fit_time)
-    return {name: fitted[name] for name in names}
+            continue
+        steps.start(f"fitting {name}")
+        model, t0 = make[name](), time.perf_counter()
+        model.fit(data.X_train, data.y_train)
+        fitted[name] = (model, time.perf_counter() - t0)
+        steps.done()
+    if "decoupled" in names:
+        start, start_time = fitted["pnlss_si"]
+        candidates = []
+        for r, d in grid:
+            steps.start(f"fitting decoupled r={r} d={d}")
+            # The seed paper's pick is 3 branches of degree 10 (51 nonlinear
+            # parameters); every candidate starts from the same full model.
+            model = DecoupledPNLSSRegressor(3, n_branches=r, degree=d, period=P, n_init=n_init, n_jobs=n_jobs,
+                                            max_iter=iterations(100), random_state=0)
+            t0 = time.perf_counter()
+            try:
+                model.fit(attach_stage(data.X_train, start), data.y_train, X_val=data.X_val, y_val=data.y_val)
+            except ValueError:
+                model = None  # every start diverged: a failed candidate, not a failed study
+            candidates.append((r, d, model, time.perf_counter() - t0))
+            steps.done()
+        for r, d, model, fit_time in candidates:
+            grid_rows.append({
+                "n_branches": r, "degree": d,
+                "n_nonlinear_params": int(model.n_nonlinear_params_) if model is not None else None,
+                "validation_db": round(float(np.min(model.init_scores_)), 2) if model is not None else None,
+                "fit_time_s": round(fit_time, 3),
+            })
+        ok = [c for c in candidates if c[2] is not None and np.isfinite(np.min(c[2].init_scores_))]
+        if not ok:
+            raise RuntimeError("Every decoupled candidate diverged; try more iterations or other branches/degrees.")
+        r, d, model, fit_time = min(ok, key=lambda c: np.min(c[2].init_scores_))
+        fitted["decoupled"] = (model, fit_time + start_time)
+    return {name: fitted[name] for name in names}, grid_rows
 
 
 def run_study(
@@ -99,42 +131,84 @@ def run_study(
     rms=55.0,
     noise_rms=8e-6,
     random_state=0,
+    branches=(3,),
+    degrees=(10,),
+    n_init=5,
+    max_iter=None,
+    n_jobs=-1,
+    save_models=False,
     plots=True,
     progress=True,
 ):
-    """Run the Bouc-Wen study and return its results as a list of dicts.
+    """Run the Bouc-Wen study; return its summary and write it to
+    ``output_dir`` as ``results.json`` and ``results.csv``, beside the
+    figures.
 
     Parameters
     ----------
-    data_dir : path or None
+    data_dir : path or None, default=None
         Folder with the official benchmark files; when given, the models are
         scored on the official test multisine and sweep (training data are
         always simulated: the benchmark forbids training on test data).
-    output_dir : path
-        Where figures and ``results.json`` / ``results.csv`` are written.
-    models : sequence of str
-        Models to fit, among ``MODELS``.
+    output_dir : path, default="bouc_wen_results"
+        Where figures, ``results.json`` / ``results.csv`` (and the grid's
+        ``grid.csv``, the saved models) are written.
+    models : sequence of str, default=MODELS
+        Models to fit, among ``MODELS``: ``"bla"``, ``"pnlss"`` (states only),
+        ``"pnlss_si"`` (states and input), ``"decoupled"``.
     n_realizations, n_periods, rms, noise_rms, random_state
         Training data of :func:`sklearn_pnlss.datasets.make_bouc_wen`; one
-        more realisation is simulated for validation (the decoupled model
-        keeps its best start on it). The default 55 N rms is the seed
-        paper's: a little above the 50 N of the test multisine, so that the
-        test's peaks stay inside the range the polynomials were fitted on.
-    plots : bool
+        more realisation is simulated for validation (best iterate and start
+        of the decoupled model, and its selection). The default 55 N rms is
+        the seed paper's: a little above the 50 N of the test multisine, so
+        that the test's peaks stay inside the range the polynomials were
+        fitted on.
+    branches, degrees : sequence of int, default=(3,) and (10,)
+        The decoupled model's selection grid: every (branches, degree) pair
+        is fitted and the one with the lowest validation error is kept. The
+        default is the seed paper's pick alone.
+    n_init : int, default=5
+        Starts of each decoupled model.
+    max_iter : int or None, default=None
+        Levenberg-Marquardt iterations of every nonlinear model; None: 40
+        (``pnlss``), 200 (``pnlss_si``), 100 (``decoupled``).
+    n_jobs : int or None, default=-1
+        Threads for the simulation of the training data and the decoupled
+        starts (-1: all cores; None: one). Results do not depend on it.
+    save_models : bool, default=False
+        Write every fitted model to ``<name>.joblib`` in ``output_dir``
+        (:func:`sklearn_pnlss.persistence.save`).
+    plots : bool, default=True
         Write figures (needs matplotlib).
-    progress : bool
+    progress : bool, default=True
         Show a progress bar over the stages.
+
+    Returns
+    -------
+    summary : dict
+        ``training`` (the data settings), ``results`` (one row per model:
+        parameters, fit time, rms error in m and dB on each test signal),
+        ``models`` (each model's :meth:`summary`), ``grid`` (the decoupled
+        candidates) and, with the BLA, its modes and distortion levels.
     """
     from .datasets import load_bouc_wen_official, make_bouc_wen
 
+    unknown = sorted(set(models) - set(MODELS))
+    if unknown:
+        raise ValueError(f"Unknown model(s) {unknown}; choose among {list(MODELS)}.")
+    grid = [(int(r), int(d)) for r in branches for d in degrees]
+    if "decoupled" in models and not grid:
+        raise ValueError("The decoupled model needs at least one value in branches and in degrees.")
     out = Path(output_dir)
     out.mkdir(parents=True, exist_ok=True)
-    steps = _Steps(3 + bool(data_dir) + bool(plots), progress)
+    n_fits = len([m for m in models if m != "decoupled"]) + ("decoupled" in models) * (
+        len(grid) + ("pnlss_si" not in models))
+    steps = _Steps(2 + n_fits + bool(data_dir) + bool(plots) + bool(save_models), progress)
     t0 = time.perf_counter()
     steps.start("simulating Bouc-Wen training data")
     data = make_bouc_wen(
         n_realizations=n_realizations + 1, n_periods=n_periods, rms=rms,
-        noise_rms=noise_rms, random_state=random_state,
+        noise_rms=noise_rms, random_state=random_state, n_jobs=n_jobs,
     )
     # The last realisation is for validation only (its last period: steady state).
     data["X_val"], data["y_val"] = data.X_train[-1:, -data.period :], data.y_train[-1:, -data.period :]
@@ -149,9 +223,8 @@ def run_study(
             data[key] = official[key]
         test_source = "official"
         steps.done()
-    steps.start("fitting " + ", ".join(models))
-    fitted = _fit_models(models, data, verbose=0)
-    steps.done()
+    fitted, grid_rows = _fit_models(models, data, grid=grid, n_init=n_init, n_jobs=n_jobs, max_iter=max_iter,
+                                    steps=steps)
     steps.start("scoring on the test multisine and sweep")
     rows, preds = [], {}
     for name, (model, fit_time) in fitted.items():
@@ -171,7 +244,14 @@ def run_study(
     steps.done()
     if plots:
         steps.start("drawing figures")
-        _figures(out, data, fitted, preds)
+        _figures(out, data, fitted, preds, grid_rows)
+        steps.done()
+    if save_models:
+        from .persistence import save
+
+        steps.start("saving the models")
+        for name, (model, _) in fitted.items():
+            save(model, out / f"{name}.joblib")
         steps.done()
     steps.close()
     summary = {
@@ -181,7 +261,14 @@ def run_study(
             "simulation_time_s": round(t_sim, 2),
         },
         "results": rows,
+        "models": {name: model.summary().to_dict() for name, (model, _) in fitted.items()},
     }
+    if grid_rows:
+        summary["grid"] = grid_rows
+        with open(out / "grid.csv", "w", newline="") as fh:
+            writer = csv.DictWriter(fh, fieldnames=list(grid_rows[0]))
+            writer.writeheader()
+            writer.writerows(grid_rows)
     if "bla" in fitted:
         bla = fitted["bla"][0]
         summary["bla"] = {
@@ -189,7 +276,7 @@ def run_study(
             "damping_ratios": bla.damping_ratios_.tolist(),
             "distortion_levels_db": bla.distortion_levels_,
         }
-    (out / "results.json").write_text(json.dumps(summary, indent=2))
+    (out / "results.json").write_text(json.dumps(summary, indent=2, default=_json_default))
     with open(out / "results.csv", "w", newline="") as fh:
         writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
         writer.writeheader()
@@ -197,13 +284,20 @@ def run_study(
     return summary
 
 
-def _figures(out, data, fitted, preds):
+def _json_default(value):
+    """NaN-free JSON for numpy scalars (``json`` does not know them)."""
+    if isinstance(value, np.generic):
+        return value.item()
+    raise TypeError(f"{type(value).__name__} is not JSON serialisable")
+
+
+def _figures(out, data, fitted, preds, grid_rows):
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from .plotting import plot_bla, plot_error_spectra, plot_time_errors
+    from .plotting import plot_bla, plot_branches, plot_error_spectra, plot_grid_search, plot_time_errors
 
     if "bla" in fitted:
         ax = plot_bla(fitted["bla"][0])
@@ -221,6 +315,27 @@ def _figures(out, data, fitted, preds):
     ax.set_title("Swept sine: simulation error over time")
     ax.figure.savefig(out / "error_time_sweep.png", dpi=120, bbox_inches="tight")
     plt.close(ax.figure)
+    if "decoupled" in fitted:
+        axes = plot_branches(fitted["decoupled"][0], data.X_test_multisine)
+        axes[0].figure.suptitle("Decoupled model: branches, and their values on the test multisine")
+        axes[0].figure.savefig(out / "decoupled_branches.png", dpi=120, bbox_inches="tight")
+        plt.close(axes[0].figure)
+    if len(grid_rows) > 1:
+        ok = [row for row in grid_rows if row["validation_db"] is not None]
+        results = {
+            "param_n_branches": np.array([row["n_branches"] for row in ok], dtype=object),
+            "param_degree": np.array([row["degree"] for row in ok], dtype=object),
+            "mean_test_score": np.array([-row["validation_db"] for row in ok]),
+            "mean_test_n_nonlinear_params": np.array([row["n_nonlinear_params"] for row in ok]),
+        }
+        fig, (ax_d, ax_n) = plt.subplots(1, 2, figsize=(11, 4), sharey=True)
+        plot_grid_search(results, "degree", group="n_branches", ax=ax_d)
+        plot_grid_search(results, "n_nonlinear_params", group="n_branches", ax=ax_n)
+        ax_d.set_ylabel("validation rms error (dB)")
+        ax_n.set_ylabel("")
+        fig.suptitle("Decoupled model selection")
+        fig.savefig(out / "decoupled_grid.png", dpi=120, bbox_inches="tight")
+        plt.close(fig)
 
 
 def format_table(summary):
@@ -236,33 +351,79 @@ def format_table(summary):
     return "\n".join(lines)
 
 
+def format_grid(summary):
+    """The decoupled candidates as text, the selected one marked."""
+    rows = summary.get("grid", [])
+    if len(rows) < 2:
+        return ""
+    best = min((r for r in rows if r["validation_db"] is not None), key=lambda r: r["validation_db"])
+    lines = [f"{'branches':>9}{'degree':>8}{'nonlinear params':>18}{'validation dB':>15}", "-" * 50]
+    for r in rows:
+        val = f"{r['validation_db']:.2f}" if r["validation_db"] is not None else "diverged"
+        n_par = r["n_nonlinear_params"] if r["n_nonlinear_params"] is not None else "-"
+        mark = "  <- selected" if r is best else ""
+        lines.append(f"{r['n_branches']:>9}{r['degree']:>8}{n_par:>18}{val:>15}{mark}")
+    return "\n".join(lines)
+
+
 def main(argv=None):
+    """Command-line entry point (``python -m sklearn_pnlss``)."""
     parser = argparse.ArgumentParser(
         prog="python -m sklearn_pnlss",
         description=(
             "Bouc-Wen hysteresis benchmark, end to end: simulate training data "
-            "with the library's simulator, fit the models, score them on the "
-            "test multisine and swept sine, write figures and a JSON/CSV summary."
+            "with the library's simulator, fit the models (BLA, full PNLSS, "
+            "decoupled PNLSS selected over a grid of branches and degrees), "
+            "score them on the test multisine and swept sine, and write figures, "
+            "results.json and results.csv (and grid.csv, the saved models) to "
+            "the output folder."
         ),
+        epilog="Example: python -m sklearn_pnlss --models bla decoupled --branches 2 3 --degrees 6 10 --n-jobs 2",
     )
-    parser.add_argument("--data-dir", help="folder with the official benchmark .mat files; test on them instead of simulated test data")
-    parser.add_argument("--output-dir", default="bouc_wen_results", help="where figures and results.json/csv go (default: %(default)s)")
-    parser.add_argument("--models", nargs="+", choices=MODELS, default=list(MODELS), help="models to fit (default: all)")
-    parser.add_argument("--n-realizations", type=int, default=2, help="training multisine realisations (default: %(default)s)")
-    parser.add_argument("--n-periods", type=int, default=2, help="steady-state periods per realisation (default: %(default)s)")
-    parser.add_argument("--rms", type=float, default=55.0, help="training input rms in N (default: %(default)s, the seed paper's)")
-    parser.add_argument("--noise-rms", type=float, default=8e-6, help="output noise rms in m (default: %(default)s)")
-    parser.add_argument("--random-state", type=int, default=0, help="seed of the training data (default: %(default)s)")
-    parser.add_argument("--no-plots", action="store_true", help="skip the figures")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    data = parser.add_argument_group("data")
+    data.add_argument("--data-dir", help="folder with the official benchmark .mat files; test on them instead of "
+                      "simulated test data (training data are always simulated)")
+    data.add_argument("--n-realizations", type=int, default=2, help="training multisine realisations (default: %(default)s)")
+    data.add_argument("--n-periods", type=int, default=2, help="steady-state periods per realisation (default: %(default)s)")
+    data.add_argument("--rms", type=float, default=55.0, help="training input rms in N (default: %(default)s, the seed paper's)")
+    data.add_argument("--noise-rms", type=float, default=8e-6, help="output noise rms in m (default: %(default)s)")
+    data.add_argument("--random-state", type=int, default=0, help="seed of the training data (default: %(default)s)")
+    fit = parser.add_argument_group("models")
+    fit.add_argument("--models", nargs="+", choices=MODELS, default=list(MODELS),
+                     help="models to fit: bla, pnlss (states only), pnlss_si (states and input), decoupled "
+                     "(default: all)")
+    fit.add_argument("--branches", type=int, nargs="+", default=[3], metavar="R",
+                     help="decoupled model: numbers of branches to try (default: %(default)s)")
+    fit.add_argument("--degrees", type=int, nargs="+", default=[10], metavar="D",
+                     help="decoupled model: branch degrees to try; the grid is every (R, D) pair, the one "
+                     "best on the validation realisation is kept (default: %(default)s)")
+    fit.add_argument("--n-init", type=int, default=5, help="starts of each decoupled model (default: %(default)s)")
+    fit.add_argument("--max-iter", type=int, default=None,
+                     help="Levenberg-Marquardt iterations of every nonlinear model (default: 40 pnlss, "
+                     "200 pnlss_si, 100 decoupled)")
+    fit.add_argument("--n-jobs", type=int, default=-1,
+                     help="threads for the simulation and the decoupled starts; -1: all cores (default: %(default)s)")
+    output = parser.add_argument_group("output")
+    output.add_argument("--output-dir", default="bouc_wen_results",
+                        help="where figures and results.json/csv go (default: %(default)s)")
+    output.add_argument("--save-models", action="store_true",
+                        help="also write each fitted model to <model>.joblib (load with sklearn_pnlss.persistence.load)")
+    output.add_argument("--no-plots", action="store_true", help="skip the figures")
+    output.add_argument("--no-progress", action="store_true", help="no progress bar")
     args = parser.parse_args(argv)
     summary = run_study(
         data_dir=args.data_dir, output_dir=args.output_dir, models=args.models,
         n_realizations=args.n_realizations, n_periods=args.n_periods, rms=args.rms,
         noise_rms=args.noise_rms, random_state=args.random_state,
+        branches=args.branches, degrees=args.degrees, n_init=args.n_init, max_iter=args.max_iter,
+        n_jobs=args.n_jobs, save_models=args.save_models,
         plots=not args.no_plots, progress=not args.no_progress,
     )
     print(format_table(summary))
+    grid = format_grid(summary)
+    if grid:
+        print("\nDecoupled model selection (validation realisation):")
+        print(grid)
     if "bla" in summary:
         b = summary["bla"]
         print(

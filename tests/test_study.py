@@ -28,5 +28,41 @@ def test_help_documents_the_options(capsys):
         main(["--help"])
     assert exc.value.code == 0
     text = capsys.readouterr().out
-    for option in ("--data-dir", "--output-dir", "--models", "--n-realizations"):
+    for option in ("--data-dir", "--output-dir", "--models", "--n-realizations", "--branches", "--degrees",
+                   "--n-init", "--max-iter", "--n-jobs", "--save-models", "--no-progress"):
         assert option in text
+
+
+def test_decoupled_grid_selects_on_validation_and_saves_models(tmp_path, capsys):
+    """A tiny grid: every candidate is reported, the one with the lowest
+    validation error is kept, and the saved models load back."""
+    from sklearn_pnlss.persistence import load
+
+    code = main([
+        "--models", "decoupled", "--branches", "1", "2", "--degrees", "3", "--n-init", "1",
+        "--max-iter", "3", "--n-realizations", "1", "--n-jobs", "2", "--save-models",
+        "--no-progress", "--output-dir", str(tmp_path),
+    ])
+    assert code == 0
+    printed = capsys.readouterr().out
+    assert "<- selected" in printed and "decoupled" in printed
+    summary = json.loads((tmp_path / "results.json").read_text())
+    grid = summary["grid"]
+    assert [(row["n_branches"], row["degree"]) for row in grid] == [(1, 3), (2, 3)]
+    assert [row["n_nonlinear_params"] for row in grid] == [(2 * 3 + 1 + 3) * r for r in (1, 2)]
+    best = min(grid, key=lambda row: row["validation_db"])
+    (row,) = summary["results"]
+    assert row["model"] == "decoupled" and row["n_params"] == 16 + best["n_nonlinear_params"]
+    model = summary["models"]["decoupled"]
+    assert model["n_nonlinear_params"] == best["n_nonlinear_params"] and model["fs"] == 750.0
+    assert (tmp_path / "grid.csv").read_text().splitlines()[0].startswith("n_branches,degree")
+    for name in ("decoupled_grid.png", "decoupled_branches.png"):
+        assert (tmp_path / name).stat().st_size > 10_000
+    decoupled = load(tmp_path / "decoupled.joblib")
+    assert decoupled.n_params_ == row["n_params"]
+    assert (decoupled.n_branches, decoupled.degree) == (best["n_branches"], best["degree"])
+
+
+def test_unknown_model_is_a_clear_error(tmp_path):
+    with pytest.raises(ValueError, match="Unknown model"):
+        run_study(output_dir=tmp_path, models=("bla", "arx"), progress=False, plots=False)

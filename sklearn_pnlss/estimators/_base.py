@@ -1,9 +1,12 @@
 """What every dynamic-model estimator of the library shares: the signal
-convention, periodic steady state, the rms-dB score and scikit-learn tags."""
+convention, periodic steady state, the rms-dB score, scikit-learn tags, and
+the fitted model as an object to read (summary, export of the linear
+part)."""
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils import TransformerTags
 from sklearn.utils.validation import check_is_fitted
 
+from ..inspection import linear_statespace, lm_fit_figures, summarize
 from ..metrics import rms_error
 from ..utils.handover import attach_stage
 from ..utils.validation import is_periodic, restore_layout, signal_layout, validate_signals
@@ -97,6 +100,90 @@ class SignalRegressorBase(RegressorMixin, BaseEstimator):
         if sample_weight is not None:
             raise ValueError("sample_weight is not supported by dynamic models; pass None.")
         return -rms_error(y, self.predict(X), db=True)
+
+    def summary(self, X=None, y=None, *, fs=None):
+        """What the fitted model is: sizes, poles of its linear part, and the
+        figures of its fit.
+
+        Parameters
+        ----------
+        X, y : signals or None, default=None
+            When given, the summary also reports the rms simulation error on
+            them (in the units of ``y`` and in dB).
+        fs : float or None, default=None
+            Sampling frequency in Hz for the natural frequencies; None uses
+            the one the model knows (``fs`` of the ``BLAEstimator`` it was
+            fitted from), or cycles per sample when there is none.
+
+        Returns
+        -------
+        summary : ModelSummary
+            Numbers as attributes (``n_params``, ``poles``,
+            ``natural_frequencies``, ``damping_ratios``, ``structure``,
+            ``fit``, ``scores``), ``to_dict()`` for JSON, and the text
+            report as ``str(summary)``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from scipy.signal import lfilter
+        >>> from sklearn_pnlss import BLAEstimator
+        >>> from sklearn_pnlss.signals import multisine
+        >>> X, _ = multisine(256, fs=100.0, f_band=(1, 40), n_periods=2, n_realizations=2, random_state=0)
+        >>> # steady state of y(t) = 0.6 y(t-1) + 0.5 u(t-1): three periods from rest, keep the last
+        >>> y = np.stack([np.tile(lfilter([0.0, 0.5], [1, -0.6], np.tile(x[:256, 0], 3))[-256:], 2)
+        ...               for x in X])[..., None]
+        >>> model = BLAEstimator(n_states=1, period=256, fs=100.0).fit(X, y)
+        >>> s = model.summary()
+        >>> s.n_params, round(float(s.poles[0].real), 3)
+        (4, 0.6)
+        """
+        check_is_fitted(self)
+        return summarize(self, X, y, fs=fs)
+
+    def to_statespace(self, fs=None):
+        """The linear part ``A_, B_, C_, D_`` as a discrete-time
+        :class:`scipy.signal.StateSpace`.
+
+        For :class:`~sklearn_pnlss.BLAEstimator` this is the whole model; for
+        the nonlinear regressors it is their linear part, the model without
+        its polynomial terms (for the decoupled model, without the branches,
+        their linear terms included).
+
+        Parameters
+        ----------
+        fs : float or None, default=None
+            Sampling frequency in Hz; None uses the one the model knows (see
+            :meth:`summary`). The system's ``dt`` is ``1 / fs``, or ``True``
+            (discrete time, unspecified step) when no frequency is known.
+
+        Returns
+        -------
+        scipy.signal.StateSpace
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from scipy.signal import lfilter
+        >>> from sklearn_pnlss import BLAEstimator
+        >>> from sklearn_pnlss.signals import multisine
+        >>> X, _ = multisine(256, fs=100.0, f_band=(1, 40), n_periods=2, n_realizations=2, random_state=0)
+        >>> y = np.stack([np.tile(lfilter([0.0, 0.5], [1, -0.6], np.tile(x[:256, 0], 3))[-256:], 2)
+        ...               for x in X])[..., None]
+        >>> sys = BLAEstimator(n_states=1, period=256, fs=100.0).fit(X, y).to_statespace()
+        >>> sys.dt, np.round(np.linalg.eigvals(sys.A).real, 3)
+        (0.01, array([0.6]))
+        """
+        check_is_fitted(self)
+        return linear_statespace(self, fs)
+
+    def _summary_structure(self):
+        """Model-specific lines of :meth:`summary` (name -> value)."""
+        return {}
+
+    def _summary_fit(self):
+        """Figures of the fit for :meth:`summary` (name -> value)."""
+        return lm_fit_figures(self) if hasattr(self, "cost_history_") else {}
 
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()

@@ -259,6 +259,24 @@ class BLAEstimator(SignalRegressorBase):
         period = self.period if periodic else None
         return simulate_linear_signal(self.A_, self.B_, self.C_, self.D_, U, periodic_with=period)
 
+    def _summary_structure(self):
+        source = (
+            f"{self.n_realizations_} realisation(s) x {self.n_periods_} period(s)" if self.n_periods_
+            else f"Welch, {self.n_realizations_} signal(s)"
+        )
+        return {"excited_lines": int(self.lines_.size), "data": source}
+
+    def _summary_fit(self):
+        # The levels tell what a linear model leaves out: nonlinear
+        # distortion at the detection lines, noise below it.
+        levels = {k: v for k, v in self.distortion_levels_.items() if np.isfinite(v)}
+        err = self.frf_model_ - self.frf_
+        with np.errstate(divide="ignore"):
+            fit = {"frf_model_error_db": float(20 * np.log10(np.sqrt(np.mean(np.abs(err) ** 2))))}
+        if levels:
+            fit["output_levels_db"] = levels
+        return fit
+
     def plot(self, ax=None):
         """FRF of the BLA with the noise and nonlinear distortion levels.
 

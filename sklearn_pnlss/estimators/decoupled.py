@@ -8,11 +8,13 @@ from joblib import Parallel, delayed
 from sklearn.base import _fit_context, clone
 from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import Interval
+from sklearn.utils.validation import check_is_fitted
 
 from ..decoupling.start import decoupled_start, states_inputs_trajectory
+from ..inspection import lm_fit_figures
 from ..statespace.model_base import DivergenceError
 from ..utils.handover import attach_stage, detach_stage
-from ..utils.validation import check_period
+from ..utils.validation import check_period, restore_layout, validate_signals
 from ._statespace import FIT_PARAMETER_CONSTRAINTS, StateSpaceRegressorBase
 from .bla import BLAEstimator
 from .pnlss import PNLSSRegressor
@@ -283,6 +285,51 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         self.coef_ = mdl.G.copy()
         z = trajectory @ mdl.V
         self.z_range_ = np.column_stack([z.min(axis=0), z.max(axis=0)])
+
+    def _summary_structure(self):
+        return {
+            "branches": int(self.coef_.shape[0]),
+            "degree": int(self.coef_.shape[1]),
+            "output_branches": bool(self.output_branches),
+            "branch_input_ranges": [f"[{lo:.3g}, {hi:.3g}]" for lo, hi in self.z_range_],
+        }
+
+    def _summary_fit(self):
+        fit = lm_fit_figures(self)
+        fit["starts"] = int(self.init_scores_.size)
+        fit["kept_start"] = int(self.best_init_)
+        fit["start_scores_db"] = [float(v) for v in self.init_scores_]
+        fit["cpd_errors"] = [float(v) for v in self.cpd_errors_]
+        return fit
+
+    def branch_inputs(self, X):
+        """The branch inputs ``z = V_^T [x; u]`` along the model's simulation
+        of ``X``: where the branches are evaluated (for plots, and to see
+        whether new signals stay inside ``z_range_``).
+
+        Parameters
+        ----------
+        X : signals, as in :meth:`predict`
+            Periodic signals (with ``period`` set) are simulated in steady
+            state, the others from rest.
+
+        Returns
+        -------
+        z : signals in the layout of ``X`` with ``n_branches`` channels
+        """
+        check_is_fitted(self)
+        X_list, _, layout = validate_signals(self, X, reset=False, min_samples=1)
+        out = []
+        for U in X_list:
+            period = self.period if self._signal_is_periodic(U.shape[0]) else None
+            try:
+                s = states_inputs_trajectory(self._model, [U / self._u_scale], period)
+            except DivergenceError as exc:
+                raise ValueError(f"{type(self).__name__}.branch_inputs: {exc}; X drives the model far "
+                                 "outside the range it was fitted on.") from None
+            # Both in normalised units: V_ absorbed the scaling, z is the same.
+            out.append(s @ self._model.V)
+        return restore_layout(out, layout)
 
     def branch_values(self, z=None, n_points=200):
         """Each branch ``g_l`` evaluated on a grid (for plots and

@@ -276,6 +276,14 @@ class PNLSSRegressor(StateSpaceRegressorBase):
             E=np.zeros((n, exE.shape[0])), F=np.zeros((p, exF.shape[0])), exE=exE, exF=exF,
         )
 
+    def _summary_structure(self):
+        return {
+            "degrees": tuple(int(d) for d in np.atleast_1d(self.degrees)),
+            "variables": "states and inputs" if self.variables == "states_inputs" else "states",
+            "monomials": {"state_equation": int(self.exponents_E_.shape[0]),
+                          "output_equation": int(self.exponents_F_.shape[0])},
+        }
+
     def _export_user_units(self):
         """Matrices in the user's units from the normalised model."""
         mdl = self._model
