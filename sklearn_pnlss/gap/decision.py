@@ -9,7 +9,7 @@ The rules, in order:
 2. **Closure.**  Each candidate's closure is the fraction of the gap's
    excess over the noise floor, in dB, that it removes on the validation
    signals: ``1 - excess_after_db / excess_before_db`` with ``excess_db =
-   10 log10(mse / noise)``, averaged over signals (1: down to the noise,
+   10 log10(mse / noise)``, pooled over signals (1: down to the noise,
    0: no better than the nominal).  In dB because gaps span decades: a
    refit that takes a 50 dB excess down to 25 dB has removed 99.7 % of the
    excess power but left a gap far above the noise; it closes 50 %.
@@ -115,8 +115,12 @@ def decide(fits, y_meas, y_nominal, y_effects, y_black_box, noise, significance)
     excess_db = 10 * np.log10(np.maximum(before / floor, 1 + 1e-12))
 
     def closure(after):
+        # Pooled over signals, each weighted by its own excess: a signal the
+        # nominal already matches (e.g. a sweep below a saturation level)
+        # adds nothing to close, and only counts against a candidate that
+        # makes it worse.
         left = 10 * np.log10(np.maximum(after, floor) / floor)
-        return float(np.mean(np.clip(1 - left / excess_db, -10.0, 1.0)))
+        return float(np.clip(1 - left.sum() / excess_db.sum(), -10.0, 1.0))
 
     ranking = []
     for fit, ys in zip(fits, y_effects):
@@ -168,7 +172,7 @@ def decide(fits, y_meas, y_nominal, y_effects, y_black_box, noise, significance)
     spread = 0.0
     if noise is not None:
         nu = np.maximum(noise.dof_per_sample * sizes, 1.0)
-        spread = float(np.mean(10 * np.log10(1 + 3 * np.sqrt(2 / nu)) / excess_db))
+        spread = float(np.sum(10 * np.log10(1 + 3 * np.sqrt(2 / nu))) / excess_db.sum())
     equivalent = [r for r in ranking if r.closure >= best.closure - TIE_CLOSURE - spread]
     recal = [r for r in equivalent if fit_by_name[r.name].effect.is_recalibration]
     chosen = recal[0] if recal else min(equivalent, key=lambda r: (r.n_params, -r.closure))
