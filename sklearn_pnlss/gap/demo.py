@@ -42,7 +42,9 @@ def run_gap_demo(out_dir=None, *, n_samples=2048, n_realizations=2, n_periods=2,
 
     data = make_bouc_wen(n_realizations=n_realizations + 1, n_periods=n_periods, n_samples=n_samples,
                          random_state=random_state, n_jobs=n_jobs)
-    sweep = swept_sine(3 * n_samples, fs=data.fs, f_start=15.0, f_stop=60.0, amplitude=20.0)
+    # Not a multiple of the period: a signal of whole periods would be taken
+    # as periodic steady state, and the sweep starts from rest.
+    sweep = swept_sine(3 * n_samples - n_samples // 16, fs=data.fs, f_start=15.0, f_stop=60.0, amplitude=20.0)
     y_sweep = simulate_bouc_wen(sweep, periodic=False, noise_rms=8e-6, random_state=random_state + 1)
     X_val = [data.X_train[-1, :n_samples], sweep[:, None]]
     y_val = [data.y_train[-1, :n_samples], y_sweep[:, None]]
