@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
+from .effects import Effect
 from .simulate import simulate_signals
 
 __all__ = ["EffectFit", "with_recalibration", "fit_effect", "effect_model"]
@@ -56,8 +57,6 @@ class EffectFit:
 
 def with_recalibration(effect, recalibration):
     """The effect with the nominal mass, damping and stiffness free too."""
-    from .effects import Effect
-
     n = effect.n_params
 
     def build(theta, nominal, scales):

@@ -12,7 +12,7 @@ from sklearn.utils.validation import check_is_fitted
 from ..physics.oscillator import Oscillator
 from ..utils.validation import as_signal_list, check_period
 from .black_box import branch_opinions, fit_black_box
-from .calibrate import fit_effect, with_recalibration
+from .calibrate import effect_model, fit_effect, with_recalibration
 from .decision import decide
 from .effects import Scales, default_effects, make_effect
 from .noise import estimate_noise
@@ -276,7 +276,6 @@ class GapDiagnosis(BaseEstimator):
         y_nominal = simulate_signals(self.nominal, val)
 
         def simulate_fit(fit):
-            from .calibrate import effect_model
             osc, transform, _ = effect_model(fit.effect, fit.theta, self.nominal, self.scales_)
             try:
                 return simulate_signals(osc, val, transform)

@@ -12,7 +12,6 @@ import numpy as np
 from sklearn.utils import check_random_state
 
 from ..physics._newmark import STATE_Z
-from ..physics.forces import StiffnessDrift
 from ..physics.oscillator import band_limited_noise
 from ..physics.resampling import decimate_fir, upsample_fft
 
@@ -120,19 +119,16 @@ def _frozen(osc):
 
 def _continuation_state(osc, frozen_state):
     """The integrator state of ``osc`` from the steady state of its frozen
-    version: time-varying elements start with their clock at zero."""
+    version: time-varying elements start with their states (clocks) at zero;
+    the integrator recomputes every rate from the equation of motion."""
     nz = osc.n_internal_states
     state = np.zeros(STATE_Z + 2 * nz)
     state[:STATE_Z] = frozen_state[:STATE_Z]
-    nz_frozen = (frozen_state.size - STATE_Z) // 2
     j = jf = 0
     for f in osc.forces:
         for _ in range(f.n_states):
-            if f.time_varying:
-                state[STATE_Z + nz + j] = 1.0 if isinstance(f, StiffnessDrift) else 0.0
-            else:
+            if not f.time_varying:
                 state[STATE_Z + j] = frozen_state[STATE_Z + jf]
-                state[STATE_Z + nz + j] = frozen_state[STATE_Z + nz_frozen + jf]
                 jf += 1
             j += 1
     return state

@@ -50,7 +50,7 @@ def signal_derivative(y, fs, n_periods, period, order=1, f_max=None):
     return np.fft.irfft(spec, ext.size)[:n]
 
 
-def _content_limit(u_list, y_list, fs):
+def _content_limit(u_list, fs):
     """Highest frequency worth differentiating: three times the input band
     (harmonics of a nonlinearity) capped at 80 % of Nyquist."""
     f_in = 0.0
@@ -90,7 +90,7 @@ def _frequency_analysis(diag, u_list, y_list, y_nominal, n_periods):
     significant[0] = False
     distortion = _distortion_level(diag, n_bins)
     f = np.fft.rfftfreq(period, 1 / fs)
-    f_hi = _content_limit([u_list[i] for i in picks], None, fs)
+    f_hi = _content_limit([u_list[i] for i in picks], fs)
     edges = np.linspace(0, f_hi, N_BANDS + 1)
     bands = []
     for lo, hi in zip(edges[:-1], edges[1:]):
@@ -166,7 +166,7 @@ def _amplitude_analysis(diag, u_list, y_list, y_nominal, velocity):
     return out
 
 
-def _force_map(diag, u_list, y_list, n_periods):
+def _force_map(diag, u_list, y_list, n_periods, f_max):
     """Mean missing force over the (displacement, velocity) plane.
 
     The missing force is what the nominal equation of motion leaves
@@ -176,7 +176,6 @@ def _force_map(diag, u_list, y_list, n_periods):
     out (their states are not measured) and flagged.
     """
     fs, period, nom = diag.fs, diag.period_, diag.nominal
-    f_max = _content_limit(u_list, y_list, fs)
     ys, vs, fm = [], [], []
     for u, y, P in zip(u_list, y_list, n_periods):
         if P:  # average the periods first: the noise drops by P
@@ -251,11 +250,11 @@ def locate_gap(diag, u_list, y_list, y_nominal, n_periods):
         (gap per displacement / velocity level, per input level),
         ``state_plane`` (missing-force map) and ``time`` (sweeps, drift).
     """
-    f_max = _content_limit(u_list, y_list, diag.fs)
+    f_max = _content_limit(u_list, diag.fs)
     velocity = [signal_derivative(y, diag.fs, P, diag.period_, 1, f_max) for y, P in zip(y_list, n_periods)]
     return dict(
         frequency=_frequency_analysis(diag, u_list, y_list, y_nominal, n_periods),
         amplitude=_amplitude_analysis(diag, u_list, y_list, y_nominal, velocity),
-        state_plane=_force_map(diag, u_list, y_list, n_periods),
+        state_plane=_force_map(diag, u_list, y_list, n_periods, f_max),
         time=_time_analysis(diag, u_list, y_list, y_nominal, n_periods),
     )

@@ -246,8 +246,9 @@ class Oscillator:
             the first sample, whose input must be ``u_fine[0]``.  The
             ``final_state`` of a periodic simulation is such a state for the
             next period (it holds the same oscillator's layout of
-            displacement, velocity, acceleration and internal states);
-            ``periodic`` must then be False.
+            displacement, velocity, acceleration and internal states; the
+            acceleration and the states' rates are recomputed from the
+            equation of motion); ``periodic`` must then be False.
         warn : bool, default=True
             Warn when the steady state is not reached (callers that check
             ``n_periods`` themselves turn it off).
@@ -273,8 +274,11 @@ class Oscillator:
                     f"initial_state must be a finite final_state of this oscillator "
                     f"(shape {state.shape}), got shape {initial_state.shape}."
                 )
+            # The acceleration and the internal states' rates follow from
+            # (y, yd, z) and u_fine[0]: recompute them, so a caller only has
+            # to supply the positions (e.g. a clock state set to zero).
             state = initial_state.copy()
-            y, yd, z, n_failed = self._run(u_fine, n - 1, h, state, False, n)
+            y, yd, z, n_failed = self._run(u_fine, n - 1, h, state, True, n)
             return FineSimulation(np.arange(n) * h, u_fine, y, yd, z, fs, 1, n_failed, state)
         if not periodic:
             y, yd, z, n_failed = self._run(u_fine, n - 1, h, state, True, n)
