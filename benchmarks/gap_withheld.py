@@ -125,6 +125,35 @@ def run_case(true_name, truth, seed, candidates, expected, n_jobs):
     return row
 
 
+def _summarise(rows):
+    confusion = Counter((str(r["expected"]), str(r["got"])) for r in rows)
+    effect_rows = [r for r in rows if r["expected"] not in (None, "unexplained")]
+    accuracy = float(np.mean([r["ok"] for r in effect_rows])) if effect_rows else float("nan")
+    ratios = [r["closure_vs_achievable"] for r in effect_rows if r["ok"] and r["closure_vs_achievable"] is not None]
+    summary = dict(
+        cases=len(rows), effect_accuracy=accuracy,
+        null_false_alarms=sum(1 for r in rows if r["expected"] is None and r["got"] is not None),
+        unexplained_ok=[r["ok"] for r in rows if r["expected"] == "unexplained"],
+        min_closure_vs_achievable=min(ratios) if ratios else None,
+        median_seconds=float(np.median([r["seconds"] for r in rows])) if rows else None,
+        max_seconds=max((r["seconds"] for r in rows), default=None),
+    )
+    return summary, confusion
+
+
+def _write(rows, args):
+    summary, confusion = _summarise(rows)
+    out = dict(header(), args=vars(args), summary=summary, rows=rows,
+               confusion=[dict(expected=e, got=g, count=n) for (e, g), n in sorted(confusion.items())])
+    RESULTS.mkdir(exist_ok=True)
+    name = "gap_withheld_quick" if args.quick else "gap_withheld"
+    if args.only:
+        name += "_" + "_".join(args.only)
+    path = RESULTS / f"{name}.json"
+    path.write_text(json.dumps(out, indent=1, default=str))
+    return path
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--quick", action="store_true", help="one seed and one strength per effect")
@@ -161,27 +190,13 @@ def main(argv=None):
               f" / achievable {row['achievable_closure']:.3f}", flush=True)
         if not row["ok"]:
             print(f"    {row['reason']}\n    {row['ranking']}", flush=True)
-    confusion = Counter((str(r["expected"]), str(r["got"])) for r in rows)
-    effect_rows = [r for r in rows if r["expected"] not in (None, "unexplained")]
-    accuracy = float(np.mean([r["ok"] for r in effect_rows])) if effect_rows else float("nan")
-    ratios = [r["closure_vs_achievable"] for r in effect_rows if r["ok"] and r["closure_vs_achievable"] is not None]
-    summary = dict(
-        cases=len(rows), effect_accuracy=accuracy,
-        null_false_alarms=sum(1 for r in rows if r["expected"] is None and r["got"] is not None),
-        unexplained_ok=[r["ok"] for r in rows if r["expected"] == "unexplained"],
-        min_closure_vs_achievable=min(ratios) if ratios else None,
-        median_seconds=float(np.median([r["seconds"] for r in rows])) if rows else None,
-        max_seconds=max((r["seconds"] for r in rows), default=None),
-    )
+        _write(rows, args)  # after every case: a stopped run keeps what it measured
+    summary, confusion = _summarise(rows)
     print("\nconfusion (expected -> got: count)")
     for (e, g), n in sorted(confusion.items()):
         print(f"  {e:<20} -> {g:<20} {n}")
     print(json.dumps(summary, indent=1))
-    out = dict(header(), args=vars(args), summary=summary, rows=rows,
-               confusion=[dict(expected=e, got=g, count=n) for (e, g), n in sorted(confusion.items())])
-    RESULTS.mkdir(exist_ok=True)
-    path = RESULTS / ("gap_withheld_quick.json" if args.quick else "gap_withheld.json")
-    path.write_text(json.dumps(out, indent=1, default=str))
+    path = _write(rows, args)
     print(f"written {path}")
     return 0
 

@@ -5,8 +5,12 @@ import numpy as np
 import pytest
 
 from sklearn_pnlss.gap import GapDiagnosis, default_effects
+from sklearn_pnlss.gap.effects import Scales, make_effect
+from sklearn_pnlss.gap.frequency_start import measured_stiffness_change, recalibration_start
+from sklearn_pnlss.gap.noise import drift_free_variance
 from sklearn_pnlss.gap.simulate import SignalSet, prime_factors, simulate_signals
 from sklearn_pnlss.physics import (
+    CoupledMass,
     CubicStiffness,
     Oscillator,
     QuadraticDamping,
@@ -162,6 +166,61 @@ def test_drift_periods_continue_from_the_initial_steady_state():
     assert np.max(np.abs(drifting[0, :20] - still[0, :20])) < 1e-3 * np.abs(still).max()
     change = [np.sqrt(np.mean((drifting[p] - still[p]) ** 2)) for p in range(3)]
     assert change[0] < change[1] < change[2]
+
+
+def test_second_mode_start_read_from_the_frf():
+    """A lightly damped mode at 60 Hz (the nominal's is 25 Hz): the FRF start
+    lands on it, where the listed starts alone settled on a wrong resonance."""
+    m2, f2, zeta = 0.2, 60.0, 0.02
+    w2 = 2 * np.pi * f2
+    real = NOMINAL.with_forces([CoupledMass(m2, 2 * zeta * m2 * w2, m2 * w2**2)])
+    u, y, _, _ = _data(real, seed=7, noise=1e-7)
+    y_nominal = simulate_signals(NOMINAL, SignalSet.from_signals(u, N, FS, 10))
+    change = measured_stiffness_change(u, y, y_nominal, N, FS)
+    scales = Scales(force=50.0, displacement=1e-3, velocity=0.1, duration=3.0, u_peak=150.0, fs=FS)
+    theta = make_effect("second_mode").data_starts(change, NOMINAL, scales)[0]
+    w1 = np.sqrt(5e4 / 2.0)
+    assert theta[0] * 2.0 == pytest.approx(m2, rel=0.1)
+    assert theta[1] * w1 == pytest.approx(w2, rel=0.01)
+    assert theta[2] == pytest.approx(zeta, rel=0.3)
+    # the same change read as a recalibration is a poor fit, but finite
+    assert np.all(np.isfinite(recalibration_start(change, NOMINAL, scales)))
+
+
+def test_recalibration_start_is_exact_for_a_linear_error():
+    real = Oscillator(2.2, 14.0, 1.05 * 5e4)
+    u, y, _, _ = _data(real, seed=8, noise=0.0)
+    y_nominal = simulate_signals(NOMINAL, SignalSet.from_signals(u, N, FS, 10))
+    scales = Scales(force=50.0, displacement=1e-3, velocity=0.1, duration=3.0, u_peak=150.0, fs=FS)
+    theta = recalibration_start(measured_stiffness_change(u, y, y_nominal, N, FS), NOMINAL, scales)
+    assert 2.0 * (1 + theta[0]) == pytest.approx(2.2, rel=1e-3)
+    assert 10.0 + theta[1] * scales.force / scales.velocity == pytest.approx(14.0, rel=1e-2)
+    assert 5e4 + theta[2] * scales.stiffness == pytest.approx(1.05 * 5e4, rel=1e-3)
+
+
+def test_noise_floor_is_not_raised_by_a_slow_drift():
+    """Period-to-period change of a drifting structure is not noise: the
+    floor from the detrended spread stays near the true noise while the
+    plain spread rises by tens of dB."""
+    X, _ = multisine(N, fs=FS, f_band=(5.0, 150.0), rms=50.0, n_periods=5, n_realizations=2, random_state=0)
+    sig = SignalSet.from_signals([x[:, 0] for x in X], N, FS, 10)
+    noise = 2e-6
+    y = simulate_signals(NOMINAL.with_forces([StiffnessDrift(-30.0)]), sig, noise_rms=noise, random_state=0)
+    still = simulate_signals(NOMINAL, sig, noise_rms=noise, random_state=0)
+
+    def floor_db(s):
+        w = np.full(s.size, 2.0)
+        w[0] = w[-1] = 1.0
+        return 10 * np.log10(np.sum(w * s) / N)
+
+    plain = np.mean([np.var(np.fft.rfft(v.reshape(5, N), axis=1) / np.sqrt(N), axis=0, ddof=1) for v in y], axis=0)
+    true_db = floor_db(drift_free_variance(still, N))
+    assert floor_db(plain) > true_db + 20  # measured: +32 dB, detrended +1.7 dB
+    assert floor_db(drift_free_variance(y, N)) < true_db + 3
+    # without drift the detrended spread is the plain one, within its scatter
+    plain_still = np.mean([np.var(np.fft.rfft(v.reshape(5, N), axis=1) / np.sqrt(N), axis=0, ddof=1)
+                           for v in still], axis=0)
+    assert abs(true_db - floor_db(plain_still)) < 0.3
 
 
 @pytest.mark.parametrize("kwargs, match", [

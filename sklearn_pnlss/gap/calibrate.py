@@ -67,8 +67,16 @@ def with_recalibration(effect, recalibration):
     starts = [np.concatenate([s, recalibration.starts[0]]) for s in effect.starts]
     bounds = (np.concatenate([effect.bounds[0], recalibration.bounds[0]]),
               np.concatenate([effect.bounds[1], recalibration.bounds[1]]))
+
+    def frequency_start(change, nominal, scales, bounds):
+        # the effect's own data start (or its first listed one) with the
+        # nominal parameters as the stiffness change suggests
+        own = effect.data_starts(change, nominal, scales) or effect.starts[:1]
+        recal = recalibration.data_starts(change, nominal, scales) or recalibration.starts[:1]
+        return np.concatenate([own[0], recal[0]])
+
     return Effect(effect.name, effect.param_names + recalibration.param_names, starts, bounds, build,
-                  effect.description, effect.is_recalibration)
+                  effect.description, effect.is_recalibration, frequency_start)
 
 
 def effect_model(effect, theta, nominal, scales):
@@ -134,7 +142,7 @@ def _solve(obj, theta0, lower, upper, max_nfev):
     return res.x, res.status > 0, res.message, float(np.sum(fun(res.x) ** 2))
 
 
-def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_signals=None):
+def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_signals=None, change=None):
     """Fit one effect by simulation error.
 
     Parameters
@@ -152,6 +160,9 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
         The training inputs at the reporting rate when ``signals`` is a
         coarse set (see :meth:`SignalSet.coarse`): the fit is then refined
         with the fitted model's own discretisation error.
+    change : StiffnessChange, default=None
+        Measured change of dynamic stiffness, from which linear effects
+        read one more start (see :mod:`sklearn_pnlss.gap.frequency_start`).
 
     Returns
     -------
@@ -160,7 +171,7 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
     start = time.perf_counter()
     obj = _Objective(effect, nominal, scales, signals, y_meas)
     lower, upper = effect.bounds
-    starts = [np.clip(s, lower, upper) for s in effect.starts]
+    starts = [np.clip(s, lower, upper) for s in effect.starts] + effect.data_starts(change, nominal, scales)
     costs = [np.sum(obj(s) ** 2) for s in starts]
     theta = starts[int(np.argmin(costs))]
     converged, message = True, "nothing to fit"

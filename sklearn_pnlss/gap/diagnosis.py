@@ -15,6 +15,7 @@ from .black_box import branch_opinions, fit_black_box
 from .calibrate import effect_model, fit_effect, with_recalibration
 from .decision import decide
 from .effects import Scales, default_effects, make_effect
+from .frequency_start import measured_stiffness_change
 from .noise import estimate_noise
 from .report import GapReport
 from .simulate import SignalSet, simulate_signals
@@ -226,11 +227,12 @@ class GapDiagnosis(BaseEstimator):
         self.train_gap_db_ = float(10 * np.log10(np.mean(np.concatenate(
             [a - b for a, b in zip(y_nominal, y_list)]) ** 2)))
 
+        change = measured_stiffness_change(u_list, y_list, y_nominal, self.period_, self.fs)
         coarse = train.coarse(self.fit_oversampling, self.nominal)
         self._log(f"fitting {len(effects)} candidates on {len(u_list)} signals")
         self.fits_ = Parallel(n_jobs=self.n_jobs, prefer="threads")(
             delayed(fit_effect)(e, self.nominal, self.scales_, coarse, y_list, max_nfev=self.max_nfev,
-                                fine_signals=train)
+                                fine_signals=train, change=change)
             for e in effects
         )
         for f in self.fits_:

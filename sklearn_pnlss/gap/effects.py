@@ -24,6 +24,7 @@ from ..physics.forces import (
     QuadraticStiffness,
     StiffnessDrift,
 )
+from .frequency_start import recalibration_start, second_mode_start
 
 __all__ = ["Scales", "Effect", "default_effects", "make_effect", "BUILT_IN"]
 
@@ -83,6 +84,12 @@ class Effect:
         parameter values.
     description : str
         One line saying what the effect is.
+    is_recalibration : bool
+        Whether the effect only refits the nominal parameters.
+    frequency_start : callable or None
+        ``frequency_start(change, nominal, scales, bounds) -> theta``: a
+        start read from the measured change of dynamic stiffness (see
+        :mod:`sklearn_pnlss.gap.frequency_start`), for linear effects.
     """
 
     name: str
@@ -92,6 +99,17 @@ class Effect:
     build: callable
     description: str = ""
     is_recalibration: bool = field(default=False)
+    frequency_start: callable = None
+
+    def data_starts(self, change, nominal, scales):
+        """Starting points read from the data (empty without a stiffness
+        change or a frequency start), inside the bounds."""
+        if change is None or self.frequency_start is None:
+            return []
+        theta = self.frequency_start(change, nominal, scales, self.bounds)
+        if theta is None or not np.all(np.isfinite(theta)):
+            return []
+        return [np.clip(theta, *self.bounds)]
 
     @property
     def n_params(self):
@@ -241,6 +259,10 @@ def _built_in():
         _box((-0.9, 10.0), (-5.0, 5.0), (-5.0, 5.0)), _recalibration,
         "nominal mass, damping and stiffness refitted, no new physics")
     effects["recalibration"].is_recalibration = True
+    effects["recalibration"].frequency_start = (
+        lambda change, nominal, scales, bounds: recalibration_start(change, nominal, scales))
+    effects["second_mode"].frequency_start = (
+        lambda change, nominal, scales, bounds: second_mode_start(change, nominal, bounds))
     return effects
 
 

@@ -11,9 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-from ..frequency.noise import periodic_noise_variance
-
-__all__ = ["NoiseFloor", "estimate_noise", "gap_test"]
+__all__ = ["NoiseFloor", "drift_free_variance", "estimate_noise", "gap_test"]
 
 
 @dataclass
@@ -40,14 +38,43 @@ class NoiseFloor:
         return float(np.sqrt(self.variance))
 
 
+def drift_free_variance(y_list, period):
+    """Noise variance of one period's unitary DFT per bin, from what changes
+    between periods once a slow trend over the periods is removed.
+
+    A structure that drifts (stiffness changing with temperature) changes
+    its response from period to period too; taken as noise, that change
+    would raise the floor up to the gap itself and hide it.  So each bin is
+    regressed on a polynomial in the period index, of degree two with four
+    periods or more, one with three, and the residual spread is the noise
+    (``P - 3``, ``P - 2`` degrees of freedom); two periods give their plain
+    spread (one).  A strong drift is not a polynomial of the period index
+    (near a resonance the response is far from linear in the stiffness), so
+    the result is then an upper bound.  None without a signal of two
+    periods.
+    """
+    total, dof = 0.0, 0
+    for y in y_list:
+        y = np.asarray(y, dtype=float)
+        if y.size % period or y.size < 2 * period:
+            continue
+        P = y.size // period
+        Yf = np.fft.rfft(y.reshape(P, period), axis=1) / np.sqrt(period)
+        trend = np.vander(np.arange(P) - (P - 1) / 2, min(3, P - 1), increasing=True)
+        Q, _ = np.linalg.qr(trend)
+        residual = Yf - Q @ (Q.T @ Yf)
+        total = total + np.sum(np.abs(residual) ** 2, axis=0)
+        dof += P - Q.shape[1]
+    return None if dof == 0 else total / dof
+
+
 def estimate_noise(y_list, period):
     """:class:`NoiseFloor` from signals of two periods or more (None if none)."""
     if period is None:
         return None
-    var = periodic_noise_variance([np.asarray(y).reshape(-1, 1) for y in y_list], period)
-    if var is None:
+    s = drift_free_variance(y_list, period)
+    if s is None:
         return None
-    s = var[:, 0]
     # Two-sided spectrum: the bins between DC and Nyquist count twice.
     weights = np.full(s.size, 2.0)
     weights[0] = 1.0

@@ -1,0 +1,108 @@
+"""Starting points of the linear candidates from the measured FRF.
+
+A lightly damped second mode makes the simulation error a rugged function
+of its frequency: a local optimiser started a factor two off settles on a
+wrong resonance.  Linear candidates, however, change the structure's
+dynamic stiffness ``1 / G(w)`` by a known function of their parameters, and
+the measured change is there to read: the dynamic stiffness of the
+measurement's BLA minus that of the nominal simulation's BLA on the same
+inputs (which holds the nominal's own nonlinear forces as they act at the
+measured levels).  Fitting that difference line by line is cheap and
+global (a dense grid over the resonance frequency), and gives the
+simulation-error fit a start in the right basin.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..frequency.bla import periodic_bla
+
+__all__ = ["StiffnessChange", "measured_stiffness_change", "second_mode_start", "recalibration_start"]
+
+
+@dataclass
+class StiffnessChange:
+    """Measured change of the dynamic stiffness at the excited lines.
+
+    Attributes
+    ----------
+    omega : ndarray of shape (K,)
+        Angular frequencies of the excited lines, rad/s.
+    delta : ndarray of shape (K,), complex
+        ``1 / G_measured - 1 / G_nominal``, N/m.
+    weight : ndarray of shape (K,)
+        Least-squares weights that turn a stiffness misfit into output
+        error: ``|G_measured G_nominal U|^2`` (output error is about
+        ``G_m G_n dK U``).
+    """
+
+    omega: np.ndarray
+    delta: np.ndarray
+    weight: np.ndarray
+
+
+def measured_stiffness_change(u_list, y_list, y_nominal, period, fs):
+    """:class:`StiffnessChange` from the periodic training signals, or None
+    without at least one steady-state periodic signal."""
+    picks = [i for i, u in enumerate(u_list) if period and u.size % period == 0]
+    if not picks:
+        return None
+
+    def split(signals):
+        return [signals[i].reshape(-1, period, 1) for i in picks]
+
+    try:
+        measured = periodic_bla(split(u_list), split(y_list))
+        nominal = periodic_bla(split(u_list), split(y_nominal), lines=measured.lines)
+    except ValueError:
+        return None
+    g_m, g_n = measured.frf[:, 0, 0], nominal.frf[:, 0, 0]
+    ok = (np.abs(g_m) > 0) & (np.abs(g_n) > 0)
+    lines = np.asarray(measured.lines)[ok]
+    u_power = np.mean([np.abs(np.fft.rfft(u_list[i][:period])[lines]) ** 2 for i in picks], axis=0)
+    return StiffnessChange(omega=2 * np.pi * lines * fs / period,
+                           delta=1 / g_m[ok] - 1 / g_n[ok],
+                           weight=np.abs(g_m[ok] * g_n[ok]) ** 2 * u_power)
+
+
+def _attached_oscillator(omega, w2, zeta):
+    """Dynamic stiffness per unit attached mass of an oscillator of natural
+    frequency ``w2`` and damping ratio ``zeta`` hung on the structure."""
+    spring = w2**2 + 2j * zeta * w2 * omega
+    return -omega**2 * spring / (spring - omega**2)
+
+
+def second_mode_start(change, nominal, bounds, n_grid=400):
+    """Best ``theta = (mass ratio, frequency ratio, damping ratio)`` of an
+    attached oscillator for the measured stiffness change: a dense grid in
+    frequency and damping, the mass by weighted linear least squares (the
+    change is proportional to it)."""
+    w1 = np.sqrt(nominal.stiffness / nominal.mass)
+    lo, hi = bounds
+    ratios = np.geomspace(max(lo[1], 1e-3), hi[1], n_grid)
+    zetas = np.geomspace(max(lo[2], 1e-3), hi[2], 12)
+    w = change.weight
+    best, best_cost = None, np.inf
+    for zeta in zetas:
+        for r in ratios:
+            h = _attached_oscillator(change.omega, r * w1, zeta)
+            hh = np.sum(w * np.abs(h) ** 2)
+            if hh == 0:
+                continue
+            mass = np.sum(w * np.real(np.conj(h) * change.delta)) / hh
+            mass = float(np.clip(mass, lo[0] * nominal.mass, hi[0] * nominal.mass))
+            cost = np.sum(w * np.abs(change.delta - mass * h) ** 2)
+            if cost < best_cost:
+                best, best_cost = np.array([mass / nominal.mass, r, zeta]), cost
+    return best
+
+
+def recalibration_start(change, nominal, scales):
+    """``theta`` of the refitted mass, damping and stiffness: the stiffness
+    change ``dk - w^2 dm + i w dc`` is linear in them."""
+    w = np.sqrt(change.weight)
+    basis = np.stack([-change.omega**2 * nominal.mass, 1j * change.omega * scales.force / scales.velocity,
+                      np.full(change.omega.shape, scales.stiffness, complex)], axis=1)
+    A = np.concatenate([(w[:, None] * basis).real, (w[:, None] * basis).imag])
+    b = np.concatenate([(w * change.delta).real, (w * change.delta).imag])
+    return np.linalg.lstsq(A, b, rcond=None)[0]
