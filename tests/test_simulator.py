@@ -290,6 +290,23 @@ def test_periodic_steady_state_equals_long_run_from_rest():
                                atol=1e-11 * np.abs(per.y).max())
 
 
+def test_slow_steady_state_is_shot_not_waited_for():
+    """A barely damped low mode decays by 4 % per period: waiting for it
+    would take some 500 periods; Newton on the period map takes ten, and
+    the result is the steady state a long run from rest reaches."""
+    m2, w2, zeta = 0.002, 7.9, 0.001
+    osc = Oscillator(M, C, K, forces=(CoupledMass(m2, 2 * zeta * m2 * w2, m2 * w2**2),))
+    n = 512
+    u = 5 * _few_line_signal(n, np.arange(4, 100))
+    u_fine = upsample_fft(u, 4, periodic=True)
+    fs = 3000.0 / 8  # a period lasts 5.5 s
+    per = osc.simulate_fine(u_fine, fs=fs, periodic=True, tol=1e-10)
+    assert per.n_periods <= 12
+    rest = osc.simulate_fine(np.tile(u_fine, 1500), fs=fs, periodic=False)
+    np.testing.assert_allclose(per.y, rest.y[-u_fine.size:], rtol=0, atol=1e-9 * np.abs(per.y).max())
+    np.testing.assert_allclose(per.z, rest.z[-u_fine.size:], rtol=0, atol=1e-8 * np.abs(per.z).max())
+
+
 def test_noise_is_band_limited_and_shaped_by_decimation():
     osc = Oscillator(M, C, K)
     u = _few_line_signal(8192, np.arange(55, 1639))

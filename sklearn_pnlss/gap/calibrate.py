@@ -16,7 +16,7 @@ from scipy.optimize import least_squares
 from .effects import Effect
 from .simulate import simulate_signals
 
-__all__ = ["EffectFit", "with_recalibration", "fit_effect", "effect_model"]
+__all__ = ["EffectFit", "with_recalibration", "meaningful_ftol", "fit_effect", "effect_model"]
 
 # Residual given to a trial point that diverges or is not physical, relative
 # to the displacement scale: far above any real misfit.
@@ -121,7 +121,7 @@ class _Objective:
         return J
 
 
-def _solve(obj, theta0, lower, upper, max_nfev):
+def _solve(obj, theta0, lower, upper, max_nfev, ftol):
     cache = {}
 
     def fun(theta):
@@ -138,11 +138,28 @@ def _solve(obj, theta0, lower, upper, max_nfev):
     span = upper - lower
     theta0 = np.clip(theta0, lower + 1e-9 * span, upper - 1e-9 * span)
     res = least_squares(fun, theta0, jac=jac, bounds=(lower, upper), method="trf",
-                        x_scale="jac", max_nfev=max_nfev, xtol=1e-6, ftol=1e-8)
+                        x_scale="jac", max_nfev=max_nfev, xtol=1e-6, ftol=ftol)
     return res.x, res.status > 0, res.message, float(np.sum(fun(res.x) ** 2))
 
 
-def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_signals=None, change=None):
+def meaningful_ftol(noise, n_samples):
+    """Relative cost decrease below which an iteration only fits noise.
+
+    With the misfit at the noise level the cost is about ``nu N`` noise
+    units (``nu`` effective degrees of freedom per sample); a decrease
+    smaller than a chi-square(1) quantile (4 units) does not tell one
+    parameter value from another, and chasing it lets the optimiser wander
+    along directions the data do not determine (a negligible second mode
+    drifting to a barely damped corner).  Above the noise the same
+    fraction is a still smaller change in dB.  1e-8 without a noise floor.
+    """
+    if noise is None:
+        return 1e-8
+    return max(1e-8, 4.0 / max(noise.dof_per_sample * n_samples, 1.0))
+
+
+def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_signals=None, change=None,
+               ftol=1e-8):
     """Fit one effect by simulation error.
 
     Parameters
@@ -163,6 +180,9 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
     change : StiffnessChange, default=None
         Measured change of dynamic stiffness, from which linear effects
         read one more start (see :mod:`sklearn_pnlss.gap.frequency_start`).
+    ftol : float, default=1e-8
+        Stop when an iteration lowers the cost by less than this fraction
+        (see :func:`meaningful_ftol`).
 
     Returns
     -------
@@ -176,7 +196,7 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
     theta = starts[int(np.argmin(costs))]
     converged, message = True, "nothing to fit"
     if effect.n_params:
-        theta, converged, message, cost = _solve(obj, theta, lower, upper, max_nfev)
+        theta, converged, message, cost = _solve(obj, theta, lower, upper, max_nfev, ftol)
         if cost > min(costs):  # never worse than the best start
             theta = starts[int(np.argmin(costs))]
     n_evaluations = obj.n_evaluations
@@ -191,7 +211,7 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
             corrected = signals.with_correction(
                 [f - c for f, c in zip(fine, simulate_signals(osc, plain, transform))])
             obj = _Objective(effect, nominal, scales, corrected, y_meas)
-            theta, converged, message, _ = _solve(obj, theta, lower, upper, max(3, max_nfev // 4))
+            theta, converged, message, _ = _solve(obj, theta, lower, upper, max(3, max_nfev // 4), ftol)
             n_evaluations += obj.n_evaluations + 2
         except (ValueError, FloatingPointError):
             pass  # keep the coarse estimate

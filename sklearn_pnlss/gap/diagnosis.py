@@ -12,7 +12,7 @@ from sklearn.utils.validation import check_is_fitted
 from ..physics.oscillator import Oscillator
 from ..utils.validation import as_signal_list, check_period
 from .black_box import branch_opinions, fit_black_box
-from .calibrate import effect_model, fit_effect, with_recalibration
+from .calibrate import effect_model, fit_effect, meaningful_ftol, with_recalibration
 from .decision import decide
 from .effects import Scales, default_effects, make_effect
 from .frequency_start import measured_stiffness_change
@@ -232,7 +232,8 @@ class GapDiagnosis(BaseEstimator):
         self._log(f"fitting {len(effects)} candidates on {len(u_list)} signals")
         self.fits_ = Parallel(n_jobs=self.n_jobs, prefer="threads")(
             delayed(fit_effect)(e, self.nominal, self.scales_, coarse, y_list, max_nfev=self.max_nfev,
-                                fine_signals=train, change=change)
+                                fine_signals=train, change=change,
+                                ftol=meaningful_ftol(self.noise_, y_all.size))
             for e in effects
         )
         for f in self.fits_:
