@@ -14,7 +14,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from .effects import Effect
-from .simulate import simulate_signals
+from .simulate import FIT_MAX_PERIODS, simulate_signals
 
 __all__ = ["EffectFit", "with_recalibration", "meaningful_ftol", "fit_effect", "effect_model"]
 
@@ -101,7 +101,7 @@ class _Objective:
         self.n_evaluations += 1
         try:
             osc, transform, _ = effect_model(self.effect, theta, self.nominal, self.scales)
-            y_sim = simulate_signals(osc, self.signals, transform)
+            y_sim = simulate_signals(osc, self.signals, transform, max_periods=FIT_MAX_PERIODS)
         except (ValueError, FloatingPointError, ZeroDivisionError):
             return np.full(self.size, _PENALTY)
         r = np.concatenate([ys - ym for ys, ym in zip(y_sim, self.y_meas)]) / self.scales.displacement

@@ -42,6 +42,19 @@ def _check_pairs(u_list, y_list, xname, yname):
             raise ValueError(f"{xname}[{i}] has {u.size} samples but {yname}[{i}] has {y.size}.")
 
 
+_BLACK_BOX = "__black_box__"
+
+
+def _expected_cost(name, effects):
+    """Rough relative cost of a task, to start the long ones first: the
+    starts times the parameters (each iteration simulates once per
+    parameter); the black box counts as a mid-sized candidate."""
+    if name == _BLACK_BOX:
+        return 8
+    effect = next(e for e in effects if e.name == name)
+    return len(effect.starts) * max(effect.n_params, 1)
+
+
 class GapDiagnosis(BaseEstimator):
     """Diagnose the gap between a physical simulator and measurements.
 
@@ -230,18 +243,21 @@ class GapDiagnosis(BaseEstimator):
         change = measured_stiffness_change(u_list, y_list, y_nominal, self.period_, self.fs)
         coarse = train.coarse(self.fit_oversampling, self.nominal)
         self._log(f"fitting {len(effects)} candidates on {len(u_list)} signals")
-        self.fits_ = Parallel(n_jobs=self.n_jobs, prefer="threads")(
-            delayed(fit_effect)(e, self.nominal, self.scales_, coarse, y_list, max_nfev=self.max_nfev,
-                                fine_signals=train, change=change,
-                                ftol=meaningful_ftol(self.noise_, y_all.size))
-            for e in effects
-        )
+        ftol = meaningful_ftol(self.noise_, y_all.size)
+        tasks = {e.name: delayed(fit_effect)(e, self.nominal, self.scales_, coarse, y_list, max_nfev=self.max_nfev,
+                                             fine_signals=train, change=change, ftol=ftol)
+                 for e in effects}
+        if self.black_box:
+            tasks[_BLACK_BOX] = delayed(fit_black_box)(u_list, y_list, self.period, self.random_state, 1)
+        # One pool for the candidates and the black box, the costliest
+        # started first so that the last to finish is a short one.
+        order = sorted(tasks, key=lambda name: -_expected_cost(name, effects))
+        done = dict(zip(order, Parallel(n_jobs=self.n_jobs, prefer="threads")(tasks[k] for k in order)))
+        self.fits_ = [done[e.name] for e in effects]
         for f in self.fits_:
             self._log(f"{f.effect.name}: training {10 * np.log10(f.train_mse):.2f} dB, "
                       f"{f.n_evaluations} simulations, {f.seconds:.1f} s")
-        self.black_box_, self.black_box_branches_ = None, []
-        if self.black_box:
-            self.black_box_ = fit_black_box(u_list, y_list, self.period, self.random_state, self.n_jobs)
+        self.black_box_, self.black_box_branches_ = done.get(_BLACK_BOX), []
         if self.black_box_ is not None:
             # Read on the training signals: the branches' own range.
             self.black_box_branches_ = branch_opinions(self.black_box_, u_list, y_list, velocity_list,

@@ -136,17 +136,21 @@ def _continuation_state(osc, frozen_state):
 
 # Steady state: settled when a period ends within this fraction of its peak
 # state of where it started (noise sits near 1e-2), and at most this many
-# periods, so that a lightly damped trial point cannot stall a fit.
+# periods, so that a lightly damped trial point cannot stall a fit.  With
+# Newton shooting any stable structure settles in about ten; a trial point
+# of a fit that has not settled in FIT_MAX_PERIODS is running away (a
+# hysteresis whose loop grows without bound), and its misfit says so.
 STEADY_TOL = 1e-9
 MAX_PERIODS = 30
+FIT_MAX_PERIODS = 15
 
 
-def _steady(osc, u_fine, fs_fine):
-    return osc.simulate_fine(u_fine, fs=fs_fine, periodic=True, tol=STEADY_TOL, max_periods=MAX_PERIODS,
+def _steady(osc, u_fine, fs_fine, max_periods=MAX_PERIODS):
+    return osc.simulate_fine(u_fine, fs=fs_fine, periodic=True, tol=STEADY_TOL, max_periods=max_periods,
                              warn=False)
 
 
-def _fine_response(osc, u_fine, P, fs_fine, transform):
+def _fine_response(osc, u_fine, P, fs_fine, transform, max_periods=MAX_PERIODS):
     """Displacement at the integration rate over the whole signal."""
     periodic = P > 0
     if transform is not None:
@@ -154,13 +158,14 @@ def _fine_response(osc, u_fine, P, fs_fine, transform):
     if not periodic:
         return osc.simulate_fine(u_fine, fs=fs_fine, periodic=False).y
     if not osc.time_varying:
-        return np.tile(_steady(osc, u_fine, fs_fine).y, P)
-    start = _steady(_frozen(osc), u_fine, fs_fine).final_state
+        return np.tile(_steady(osc, u_fine, fs_fine, max_periods).y, P)
+    start = _steady(_frozen(osc), u_fine, fs_fine, max_periods).final_state
     return osc.simulate_fine(np.tile(u_fine, P), fs=fs_fine, periodic=False,
                              initial_state=_continuation_state(osc, start)).y
 
 
-def simulate_signals(osc, signals, transform=None, *, noise_rms=0.0, random_state=None):
+def simulate_signals(osc, signals, transform=None, *, noise_rms=0.0, random_state=None,
+                     max_periods=MAX_PERIODS):
     """Simulate ``osc`` on every signal of a :class:`SignalSet`.
 
     Parameters
@@ -175,6 +180,9 @@ def simulate_signals(osc, signals, transform=None, *, noise_rms=0.0, random_stat
         band-limited to the data's Nyquist frequency (the benchmark's noise).
     random_state : int, RandomState instance or None
         Seed of the noise.
+    max_periods : int, default=MAX_PERIODS
+        Cap on the periods of each steady-state search (fits use
+        ``FIT_MAX_PERIODS``).
 
     Returns
     -------
@@ -186,7 +194,7 @@ def simulate_signals(osc, signals, transform=None, *, noise_rms=0.0, random_stat
     fs_fine = signals.fs * signals.oversampling
     out = []
     for u_fine, P in zip(signals.u_fine, signals.n_periods):
-        y_fine = _fine_response(osc, u_fine, P, fs_fine, transform)
+        y_fine = _fine_response(osc, u_fine, P, fs_fine, transform, max_periods)
         if noise_rms > 0:
             y_fine = y_fine + band_limited_noise(y_fine.size, fs=fs_fine, f_max=signals.fs / 2,
                                                  rms=noise_rms, random_state=rng)

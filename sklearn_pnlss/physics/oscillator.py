@@ -8,7 +8,8 @@ from scipy import fft as sp_fft
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.utils import check_random_state
 
-from ._newmark import STATE_Y, STATE_YD, STATE_Z, custom_dispatcher, newmark_run, stateless_forces
+from ._newmark import STATE_Z, custom_dispatcher, newmark_run, stateless_forces
+from ._shooting import PeriodShooter
 from .forces import pack_forces
 from .resampling import _check_signal, check_factors, decimate_fir, upsample_fft
 
@@ -299,25 +300,33 @@ class Oscillator:
         init = True
         total_failed = 0
         converged = False
-        period, next_shot = 0, _SHOOT_AFTER
+        # After a few unsettled periods, Newton steps on the period map (see
+        # _shooting): a slowly decaying structure needs a handful of
+        # periods instead of hundreds.
+        shooter = PeriodShooter(lambda st, ini: self._run(u_fine, n, h, st, ini, n)[:3], state.size, nz)
+        period, resume = 0, None
         while period < max_periods:
-            if period >= next_shot:
-                # Slow decay (a lightly damped or low mode): jump to the
-                # fixed point of the period map instead of waiting for it.
-                shot, used = self._shoot(u_fine, n, h, state, y, yd, z, max_periods - period)
-                period += used
-                next_shot = period + _SHOOT_AFTER
-                if shot is not None:
-                    state, init = shot, True
-                continue
             start = state.copy()
-            y, yd, z, n_failed = self._run(u_fine, n, h, state, init, n)
+            try:
+                y, yd, z, n_failed = self._run(u_fine, n, h, state, init, n)
+            except FloatingPointError:
+                if resume is None:
+                    raise
+                # the shot diverged: carry on plainly from the period before
+                state, init, resume, shooter.active = resume, False, None, False
+                continue
             period += 1
             init = False
             total_failed += n_failed
             if period > 1 and self._settled(start, state, y, yd, z, tol):
                 converged = True
                 break
+            if period >= _SHOOT_AFTER and period < max_periods:
+                shot, used = shooter.step(start, state, [y, yd] + [z[:, j] for j in range(nz)],
+                                          max_periods - period - 1)
+                period += used
+                if shot is not None:
+                    state, init, resume = shot, True, state.copy()
         if not converged and warn:
             warnings.warn(
                 f"periodic steady state not reached within max_periods={max_periods} "
@@ -326,49 +335,6 @@ class Oscillator:
                 stacklevel=2,
             )
         return FineSimulation(np.arange(n) * h, u_fine, y, yd, z, fs, period, total_failed, state)
-
-    def _shoot(self, u_fine, n, h, state, y, yd, z, budget):
-        """One Newton step towards the periodic steady state.
-
-        The period map sends the positions ``p = (y, yd, z)`` at a period's
-        start to those at its end; the steady state is its fixed point.  The
-        map's Jacobian by forward differences costs one period per
-        position; for a linear structure the step is exact, for a nonlinear
-        one it converges quadratically.  The usual period-to-period check
-        then confirms the steady state, so the result is the same as without
-        shooting.  Returns the new start state (None when the budget of
-        periods is too small or the step fails) and the periods used.
-        """
-        nz = self.n_internal_states
-        idx = np.r_[STATE_Y, STATE_YD, STATE_Z:STATE_Z + nz]
-        if idx.size + 1 > budget:
-            return None, 0
-        traces = [y, yd] + [z[:, j] for j in range(nz)]
-        scale = np.array([max(np.max(np.abs(t)), 1e-300) for t in traces])
-
-        def period_map(p):
-            s = np.zeros_like(state)
-            s[idx] = p
-            self._run(u_fine, n, h, s, True, n)
-            return s[idx]
-
-        p0 = state[idx].copy()
-        try:
-            f0 = period_map(p0)
-            jac = np.empty((idx.size, idx.size))
-            for j in range(idx.size):
-                step = 1e-4 * scale[j]
-                p = p0.copy()
-                p[j] += step
-                jac[:, j] = (period_map(p) - f0) / step
-            p_new = p0 + np.linalg.solve(jac - np.eye(idx.size), p0 - f0)
-        except (FloatingPointError, np.linalg.LinAlgError):
-            return None, idx.size + 1
-        if not np.all(np.isfinite(p_new)):
-            return None, idx.size + 1
-        shot = np.zeros_like(state)
-        shot[idx] = p_new
-        return shot, idx.size + 1
 
     @staticmethod
     def _settled(start, end, y, yd, z, tol):
