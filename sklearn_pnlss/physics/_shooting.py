@@ -51,11 +51,11 @@ class PeriodShooter:
         s[self.idx] = p
         return s
 
-    def _jacobian(self, p, f, traces, budget):
-        """Forward-difference Jacobian of ``G`` at ``p`` (``f = F(p)``)."""
+    def _jacobian(self, p, f, scale, budget):
+        """Forward-difference Jacobian of ``G`` at ``p`` (``f = F(p)``),
+        steps relative to each position's peak ``scale``."""
         if self.idx.size > budget:
             return None
-        scale = np.array([max(np.max(np.abs(t)), 1e-300) for t in traces])
         jac = np.empty((self.idx.size, self.idx.size))
         for j in range(self.idx.size):
             step = _FD_STEP * scale[j]
@@ -85,7 +85,7 @@ class PeriodShooter:
             return None, 0
         try:
             if self.jac is None:
-                self.jac = self._jacobian(p, f, traces, budget)
+                self.jac = self._jacobian(p, f, scale, budget)
                 used = self.idx.size
                 if self.jac is None:
                     self.active = False
