@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from sklearn_pnlss.gap import GapDiagnosis, default_effects
+from sklearn_pnlss.gap.clues import DataClues
 from sklearn_pnlss.gap.effects import Scales, make_effect
 from sklearn_pnlss.gap.frequency_start import measured_stiffness_change, recalibration_start
 from sklearn_pnlss.gap.noise import drift_free_variance
@@ -178,7 +179,7 @@ def test_second_mode_start_read_from_the_frf():
     y_nominal = simulate_signals(NOMINAL, SignalSet.from_signals(u, N, FS, 10))
     change = measured_stiffness_change(u, y, y_nominal, N, FS)
     scales = Scales(force=50.0, displacement=1e-3, velocity=0.1, duration=3.0, u_peak=150.0, fs=FS)
-    theta = make_effect("second_mode").data_starts(change, NOMINAL, scales)[0]
+    theta = make_effect("second_mode").data_starts(DataClues(change), NOMINAL, scales)[0]
     w1 = np.sqrt(5e4 / 2.0)
     assert theta[0] * 2.0 == pytest.approx(m2, rel=0.1)
     assert theta[1] * w1 == pytest.approx(w2, rel=0.01)

@@ -68,15 +68,15 @@ def with_recalibration(effect, recalibration):
     bounds = (np.concatenate([effect.bounds[0], recalibration.bounds[0]]),
               np.concatenate([effect.bounds[1], recalibration.bounds[1]]))
 
-    def frequency_start(change, nominal, scales, bounds):
+    def data_start(clues, nominal, scales, bounds):
         # the effect's own data start (or its first listed one) with the
         # nominal parameters as the stiffness change suggests
-        own = effect.data_starts(change, nominal, scales) or effect.starts[:1]
-        recal = recalibration.data_starts(change, nominal, scales) or recalibration.starts[:1]
+        own = effect.data_starts(clues, nominal, scales) or effect.starts[:1]
+        recal = recalibration.data_starts(clues, nominal, scales) or recalibration.starts[:1]
         return np.concatenate([own[0], recal[0]])
 
     return Effect(effect.name, effect.param_names + recalibration.param_names, starts, bounds, build,
-                  effect.description, effect.is_recalibration, frequency_start)
+                  effect.description, effect.is_recalibration, data_start)
 
 
 def effect_model(effect, theta, nominal, scales):
@@ -158,7 +158,7 @@ def meaningful_ftol(noise, n_samples):
     return max(1e-8, 4.0 / max(noise.dof_per_sample * n_samples, 1.0))
 
 
-def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_signals=None, change=None,
+def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_signals=None, clues=None,
                ftol=1e-8):
     """Fit one effect by simulation error.
 
@@ -177,9 +177,9 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
         The training inputs at the reporting rate when ``signals`` is a
         coarse set (see :meth:`SignalSet.coarse`): the fit is then refined
         with the fitted model's own discretisation error.
-    change : StiffnessChange, default=None
-        Measured change of dynamic stiffness, from which linear effects
-        read one more start (see :mod:`sklearn_pnlss.gap.frequency_start`).
+    clues : DataClues, default=None
+        Readings of the training data from which some effects take one
+        more start (see :mod:`sklearn_pnlss.gap.clues`).
     ftol : float, default=1e-8
         Stop when an iteration lowers the cost by less than this fraction
         (see :func:`meaningful_ftol`).
@@ -191,7 +191,7 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
     start = time.perf_counter()
     obj = _Objective(effect, nominal, scales, signals, y_meas)
     lower, upper = effect.bounds
-    starts = [np.clip(s, lower, upper) for s in effect.starts] + effect.data_starts(change, nominal, scales)
+    starts = [np.clip(s, lower, upper) for s in effect.starts] + effect.data_starts(clues, nominal, scales)
     costs = [np.sum(obj(s) ** 2) for s in starts]
     theta = starts[int(np.argmin(costs))]
     converged, message = True, "nothing to fit"

@@ -13,9 +13,9 @@ from ..physics.oscillator import Oscillator
 from ..utils.validation import as_signal_list, check_period
 from .black_box import branch_opinions, fit_black_box
 from .calibrate import effect_model, fit_effect, meaningful_ftol, with_recalibration
+from .clues import read_clues
 from .decision import decide
 from .effects import Scales, default_effects, make_effect
-from .frequency_start import measured_stiffness_change
 from .noise import estimate_noise
 from .report import GapReport
 from .simulate import SignalSet, simulate_signals
@@ -240,12 +240,12 @@ class GapDiagnosis(BaseEstimator):
         self.train_gap_db_ = float(10 * np.log10(np.mean(np.concatenate(
             [a - b for a, b in zip(y_nominal, y_list)]) ** 2)))
 
-        change = measured_stiffness_change(u_list, y_list, y_nominal, self.period_, self.fs)
+        clues = read_clues(self.nominal, u_list, y_list, y_nominal, train.n_periods, self.period_, self.fs)
         coarse = train.coarse(self.fit_oversampling, self.nominal)
         self._log(f"fitting {len(effects)} candidates on {len(u_list)} signals")
         ftol = meaningful_ftol(self.noise_, y_all.size)
         tasks = {e.name: delayed(fit_effect)(e, self.nominal, self.scales_, coarse, y_list, max_nfev=self.max_nfev,
-                                             fine_signals=train, change=change, ftol=ftol)
+                                             fine_signals=train, clues=clues, ftol=ftol)
                  for e in effects}
         if self.black_box:
             tasks[_BLACK_BOX] = delayed(fit_black_box)(u_list, y_list, self.period, self.random_state, 1)

@@ -24,6 +24,7 @@ from ..physics.forces import (
     QuadraticStiffness,
     StiffnessDrift,
 )
+from .clues import backlash_start
 from .frequency_start import recalibration_start, second_mode_start
 
 __all__ = ["Scales", "Effect", "default_effects", "make_effect", "BUILT_IN"]
@@ -86,10 +87,10 @@ class Effect:
         One line saying what the effect is.
     is_recalibration : bool
         Whether the effect only refits the nominal parameters.
-    frequency_start : callable or None
-        ``frequency_start(change, nominal, scales, bounds) -> theta``: a
-        start read from the measured change of dynamic stiffness (see
-        :mod:`sklearn_pnlss.gap.frequency_start`), for linear effects.
+    data_start : callable or None
+        ``data_start(clues, nominal, scales, bounds) -> theta or None``: a
+        start read from the training data before any fit (see
+        :mod:`sklearn_pnlss.gap.clues`).
     """
 
     name: str
@@ -99,14 +100,14 @@ class Effect:
     build: callable
     description: str = ""
     is_recalibration: bool = field(default=False)
-    frequency_start: callable = None
+    data_start: callable = None
 
-    def data_starts(self, change, nominal, scales):
-        """Starting points read from the data (empty without a stiffness
-        change or a frequency start), inside the bounds."""
-        if change is None or self.frequency_start is None:
+    def data_starts(self, clues, nominal, scales):
+        """Starting points read from the data (empty without clues or a
+        data start), inside the bounds."""
+        if clues is None or self.data_start is None:
             return []
-        theta = self.frequency_start(change, nominal, scales, self.bounds)
+        theta = self.data_start(clues, nominal, scales, self.bounds)
         if theta is None or not np.all(np.isfinite(theta)):
             return []
         return [np.clip(theta, *self.bounds)]
@@ -243,7 +244,10 @@ def _built_in():
     add("coulomb_friction", ("fc",), *_single(-2.0, 2.0), _coulomb, "dry friction fc sign(ydot)")
     add("quadratic_damping", ("c2",), *_single(-2.0, 2.0), _quadratic_damping,
         "quadratic damping c2 ydot |ydot|")
-    add("backlash", ("kb", "gap"), [[0.3, 0.5], [0.3, 1.0], [0.3, 1.5]],
+    # Backlash: a clearance beyond the response's peaks is a flat direction
+    # (the spring never engages), so the starts span clearances up to three
+    # rms displacements (a multisine's peaks) at a soft and a stiff spring.
+    add("backlash", ("kb", "gap"), [[kb, g] for kb in (0.3, 1.0) for g in (0.5, 1.0, 1.5, 2.0, 2.5, 3.0)],
         _box((-5.0, 50.0), (0.0, 20.0)), _backlash, "dead-zone spring engaged beyond a clearance")
     add("input_saturation", ("u_max",), *_single(0.05, 1.5, (0.95, 0.8, 0.6)), _saturation,
         "actuator force clipped at +-u_max")
@@ -259,10 +263,11 @@ def _built_in():
         _box((-0.9, 10.0), (-5.0, 5.0), (-5.0, 5.0)), _recalibration,
         "nominal mass, damping and stiffness refitted, no new physics")
     effects["recalibration"].is_recalibration = True
-    effects["recalibration"].frequency_start = (
-        lambda change, nominal, scales, bounds: recalibration_start(change, nominal, scales))
-    effects["second_mode"].frequency_start = (
-        lambda change, nominal, scales, bounds: second_mode_start(change, nominal, bounds))
+    effects["recalibration"].data_start = (
+        lambda clues, nominal, scales, bounds: clues.change and recalibration_start(clues.change, nominal, scales))
+    effects["second_mode"].data_start = (
+        lambda clues, nominal, scales, bounds: clues.change and second_mode_start(clues.change, nominal, bounds))
+    effects["backlash"].data_start = lambda clues, nominal, scales, bounds: backlash_start(clues, scales)
     return effects
 
 

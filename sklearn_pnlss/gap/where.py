@@ -11,7 +11,7 @@ from scipy.signal import hilbert
 
 from ..frequency.bla import excited_lines, periodic_bla
 
-__all__ = ["signal_derivative", "locate_gap"]
+__all__ = ["signal_derivative", "content_limit", "missing_force", "locate_gap"]
 
 N_BANDS = 8
 N_LEVELS = 8
@@ -50,7 +50,7 @@ def signal_derivative(y, fs, n_periods, period, order=1, f_max=None):
     return np.fft.irfft(spec, ext.size)[:n]
 
 
-def _content_limit(u_list, fs):
+def content_limit(u_list, fs):
     """Highest frequency worth differentiating: three times the input band
     (harmonics of a nonlinearity) capped at 80 % of Nyquist."""
     f_in = 0.0
@@ -90,7 +90,7 @@ def _frequency_analysis(diag, u_list, y_list, y_nominal, n_periods):
     significant[0] = False
     distortion = _distortion_level(diag, n_bins)
     f = np.fft.rfftfreq(period, 1 / fs)
-    f_hi = _content_limit([u_list[i] for i in picks], fs)
+    f_hi = content_limit([u_list[i] for i in picks], fs)
     edges = np.linspace(0, f_hi, N_BANDS + 1)
     bands = []
     for lo, hi in zip(edges[:-1], edges[1:]):
@@ -166,28 +166,39 @@ def _amplitude_analysis(diag, u_list, y_list, y_nominal, velocity):
     return out
 
 
-def _force_map(diag, u_list, y_list, n_periods, f_max):
-    """Mean missing force over the (displacement, velocity) plane.
+def missing_force(nominal, u_list, y_list, n_periods, period, fs, f_max):
+    """The force the nominal equation of motion leaves unbalanced along the
+    measured motion: ``u - m ydd - c yd - k y - F(y, yd)``.
 
-    The missing force is what the nominal equation of motion leaves
-    unbalanced along the measured motion: ``u - m ydd - c yd - k y - F(y,
-    yd)`` with the derivatives of the measured displacement (band-limited
-    to where the response has content).  Stateful nominal elements are left
-    out (their states are not measured) and flagged.
+    The derivatives of the measured displacement are taken by the DFT,
+    band-limited to ``f_max``; periodic signals are averaged over their
+    periods first (the noise drops by their number), the ends of the others
+    are trimmed (they ring).  Stateful nominal elements are left out: their
+    states are not measured.
+
+    Returns
+    -------
+    y, yd, force : ndarray
+        Displacement, velocity and missing force, all signals concatenated.
     """
-    fs, period, nom = diag.fs, diag.period_, diag.nominal
     ys, vs, fm = [], [], []
     for u, y, P in zip(u_list, y_list, n_periods):
-        if P:  # average the periods first: the noise drops by P
+        if P:
             u, y = _periods(u, P, period).mean(0), _periods(y, P, period).mean(0)
         v = signal_derivative(y, fs, P, period, 1, f_max)
         a = signal_derivative(y, fs, P, period, 2, f_max)
         yf = signal_derivative(y, fs, P, period, 0, f_max)
-        trim = slice(None) if P else slice(y.size // 50, y.size - y.size // 50)  # ringing ends
-        fm.append((u - nom.mass * a - nom.restoring_force(yf, v))[trim])
+        trim = slice(None) if P else slice(y.size // 50, y.size - y.size // 50)
+        fm.append((u - nominal.mass * a - nominal.restoring_force(yf, v))[trim])
         ys.append(yf[trim])
         vs.append(v[trim])
-    y, v, f = map(np.concatenate, (ys, vs, fm))
+    return tuple(map(np.concatenate, (ys, vs, fm)))
+
+
+def _force_map(diag, u_list, y_list, n_periods, f_max):
+    """Mean missing force (see :func:`missing_force`) over the
+    (displacement, velocity) plane; stateful nominal elements are flagged."""
+    y, v, f = missing_force(diag.nominal, u_list, y_list, n_periods, diag.period_, diag.fs, f_max)
     y_edges = np.linspace(y.min(), y.max(), MAP_BINS + 1)
     v_edges = np.linspace(v.min(), v.max(), MAP_BINS + 1)
     iy = np.clip(np.searchsorted(y_edges, y, side="right") - 1, 0, MAP_BINS - 1)
@@ -199,7 +210,7 @@ def _force_map(diag, u_list, y_list, n_periods, f_max):
     force = np.where(count >= MIN_PER_CELL, total / np.maximum(count, 1), np.nan)
     return dict(displacement_edges=y_edges, velocity_edges=v_edges, force=force, count=count,
                 missing_force_rms=float(np.sqrt(np.mean(f**2))),
-                stateful_nominal_left_out=bool(any(e.n_states for e in nom.forces)),
+                stateful_nominal_left_out=bool(any(e.n_states for e in diag.nominal.forces)),
                 samples=dict(displacement=y, velocity=v, force=f))
 
 
@@ -250,7 +261,7 @@ def locate_gap(diag, u_list, y_list, y_nominal, n_periods):
         (gap per displacement / velocity level, per input level),
         ``state_plane`` (missing-force map) and ``time`` (sweeps, drift).
     """
-    f_max = _content_limit(u_list, diag.fs)
+    f_max = content_limit(u_list, diag.fs)
     velocity = [signal_derivative(y, diag.fs, P, diag.period_, 1, f_max) for y, P in zip(y_list, n_periods)]
     return dict(
         frequency=_frequency_analysis(diag, u_list, y_list, y_nominal, n_periods),

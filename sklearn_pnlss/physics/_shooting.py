@@ -10,7 +10,10 @@ Jacobian comes from forward differences once (one period per position) and
 is then kept up to date by Broyden's rank-one updates from the periods that
 are simulated anyway, so every later period is also a Newton step.  The
 caller still checks each period against its start, so the answer is the
-same steady state as without shooting.
+same steady state as without shooting; and a step is taken only while the
+map contracts (its Jacobian's eigenvalues inside the unit circle), so that
+Newton does not land on an unstable orbit the structure would never settle
+on.
 """
 import numpy as np
 
@@ -94,6 +97,13 @@ class PeriodShooter:
                 dp, dg = p - self.previous[0], g - self.previous[1]
                 if dp @ dp > 0:
                     self.jac += np.outer(dg - self.jac @ dp, dp) / (dp @ dp)
+            # Newton converges to any periodic orbit, also an unstable one
+            # (a stiffening spring near resonance has several); the
+            # structure settles only on a stable one, where the period map
+            # contracts.  Otherwise plain periods find the physical orbit.
+            if np.max(np.abs(np.linalg.eigvals(self.jac + np.eye(self.idx.size)))) >= 1.0:
+                self.active = False
+                return None, used
             p_new = p - np.linalg.solve(self.jac, g)
         except (FloatingPointError, np.linalg.LinAlgError):
             self.active = False
