@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from sklearn_pnlss.gap import GapDiagnosis, default_effects
-from sklearn_pnlss.gap.clues import DataClues
+from sklearn_pnlss.gap.clues import DataClues, read_clues
 from sklearn_pnlss.gap.effects import Scales, make_effect
 from sklearn_pnlss.gap.frequency_start import measured_stiffness_change, recalibration_start
 from sklearn_pnlss.gap.noise import drift_free_variance
@@ -13,6 +13,7 @@ from sklearn_pnlss.gap.simulate import SignalSet, prime_factors, simulate_signal
 from sklearn_pnlss.physics import (
     CoupledMass,
     CubicStiffness,
+    DeadZoneSpring,
     Oscillator,
     QuadraticDamping,
     StiffnessDrift,
@@ -186,6 +187,20 @@ def test_second_mode_start_read_from_the_frf():
     assert theta[2] == pytest.approx(zeta, rel=0.3)
     # the same change read as a recalibration is a poor fit, but finite
     assert np.all(np.isfinite(recalibration_start(change, NOMINAL, scales)))
+
+
+def test_backlash_start_read_from_the_missing_force():
+    """The dead-zone spring fitted to the force the nominal leaves
+    unbalanced along the measured motion lands on the true rate and
+    clearance, without a single simulation of the candidate."""
+    real = NOMINAL.with_forces([DeadZoneSpring(3e4, 1.5e-3)])
+    u, y, _, _ = _data(real, seed=9, noise=1e-7)
+    train = SignalSet.from_signals(u, N, FS, 10)
+    clues = read_clues(NOMINAL, u, y, simulate_signals(NOMINAL, train), train.n_periods, N, FS)
+    scales = Scales(force=50.0, displacement=1e-3, velocity=0.1, duration=3.0, u_peak=150.0, fs=FS)
+    kb, gap = make_effect("backlash").data_starts(clues, NOMINAL, scales)[0] * [scales.stiffness, scales.displacement]
+    assert kb == pytest.approx(3e4, rel=0.02)  # measured: 29832 N/m, 1.488 mm
+    assert gap == pytest.approx(1.5e-3, rel=0.02)
 
 
 def test_recalibration_start_is_exact_for_a_linear_error():
