@@ -150,6 +150,7 @@ def _merged(rows, args):
     path = RESULTS / "gap_withheld.json"
     if not args.update or not path.exists():
         return rows
+
     def key(r):
         return str(r["true"]), r["seed"], str(r["expected"])
 
@@ -170,7 +171,7 @@ def _write(rows, args):
         name += "_" + "_".join(args.only)
     path = RESULTS / f"{name}.json"
     path.write_text(json.dumps(out, indent=1, default=str))
-    return path
+    return path, summary, confusion
 
 
 def main(argv=None):
@@ -212,12 +213,11 @@ def main(argv=None):
         if not row["ok"]:
             print(f"    {row['reason']}\n    {row['ranking']}", flush=True)
         _write(rows, args)  # after every case: a stopped run keeps what it measured
-    summary, confusion = _summarise(_merged(rows, args))
+    path, summary, confusion = _write(rows, args)
     print("\nconfusion (expected -> got: count)")
     for (e, g), n in sorted(confusion.items()):
         print(f"  {e:<20} -> {g:<20} {n}")
     print(json.dumps(summary, indent=1))
-    path = _write(rows, args)
     print(f"written {path}")
     return 0
 

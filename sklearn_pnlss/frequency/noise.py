@@ -6,7 +6,7 @@ from ..utils.validation import is_periodic
 __all__ = ["periodic_noise_variance"]
 
 
-def periodic_noise_variance(y_list, period):
+def periodic_noise_variance(y_list, period, trend_degree=0):
     """Noise variance of one period's unitary DFT (``rfft / sqrt(period)``)
     at every bin, from the spread over the periods of each signal.
 
@@ -18,6 +18,11 @@ def periodic_noise_variance(y_list, period):
     ----------
     y_list : list of ndarray (n_samples_i, p)
     period : int
+    trend_degree : int, default=0
+        Degree of a polynomial in the period index removed from each bin
+        first (capped at ``P - 2``), so that a slow drift of the structure
+        is not taken as noise; each signal then has ``P - 1 - degree``
+        degrees of freedom.
 
     Returns
     -------
@@ -30,6 +35,12 @@ def periodic_noise_variance(y_list, period):
             continue
         P = Y.shape[0] // period
         Yf = np.fft.rfft(Y.reshape(P, period, -1), axis=1) / np.sqrt(period)
-        total = total + np.var(Yf, axis=0, ddof=1) * (P - 1)
-        dof += P - 1
+        degree = min(trend_degree, P - 2)
+        if degree == 0:
+            residual = Yf - Yf.mean(axis=0)
+        else:
+            trend, _ = np.linalg.qr(np.vander(np.arange(P) - (P - 1) / 2, degree + 1, increasing=True))
+            residual = Yf - np.einsum("pq,qk...->pk...", trend, np.einsum("pq,pk...->qk...", trend, Yf))
+        total = total + np.sum(np.abs(residual) ** 2, axis=0)
+        dof += P - 1 - degree
     return None if dof == 0 else total / dof

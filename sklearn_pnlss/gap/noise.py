@@ -11,6 +11,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
+from ..frequency.noise import periodic_noise_variance
+
 __all__ = ["NoiseFloor", "drift_free_variance", "estimate_noise", "gap_test"]
 
 
@@ -53,19 +55,9 @@ def drift_free_variance(y_list, period):
     the result is then an upper bound.  None without a signal of two
     periods.
     """
-    total, dof = 0.0, 0
-    for y in y_list:
-        y = np.asarray(y, dtype=float)
-        if y.size % period or y.size < 2 * period:
-            continue
-        P = y.size // period
-        Yf = np.fft.rfft(y.reshape(P, period), axis=1) / np.sqrt(period)
-        trend = np.vander(np.arange(P) - (P - 1) / 2, min(3, P - 1), increasing=True)
-        Q, _ = np.linalg.qr(trend)
-        residual = Yf - Q @ (Q.T @ Yf)
-        total = total + np.sum(np.abs(residual) ** 2, axis=0)
-        dof += P - Q.shape[1]
-    return None if dof == 0 else total / dof
+    var = periodic_noise_variance([np.asarray(y, dtype=float).reshape(-1, 1) for y in y_list], period,
+                                  trend_degree=2)
+    return None if var is None else var[:, 0]
 
 
 def estimate_noise(y_list, period):
