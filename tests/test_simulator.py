@@ -269,6 +269,31 @@ def test_custom_force_must_be_compiled():
         CustomForce(lambda p, y, yd: (0.0, 0.0, 0.0))
 
 
+def test_disk_cached_kernels_never_take_a_function_argument():
+    # numba keys its disk cache by argument types, and a compiled function's
+    # type is new in every process: such an argument made every process
+    # recompile the integrator and, once a user's function was in the cache
+    # index, made saving any new entry fail. Custom elements get uncached
+    # copies of the kernels instead.
+    from numba.core import types as nb_types
+    from numba.core.caching import FunctionCache
+
+    from sklearn_pnlss.physics import _newmark
+
+    forces = (CustomForce(_cubic_spring_and_damper, [5e9, 1.0]),)
+    u = 10 * np.sin(2 * np.pi * 30 * np.arange(750) / 750)
+    y_custom = Oscillator(M, C, K, forces=forces).simulate(u, fs=750.0, periodic=True)
+    Oscillator(M, C, K, forces=forces).restoring_force(y_custom, y_custom)
+    y_plain = Oscillator(M, C, K).simulate(u, fs=750.0, periodic=True)
+    assert _rel_rms(y_custom, y_plain) > 1e-3  # the custom element was called
+    function_types = (nb_types.Dispatcher, nb_types.FunctionType, nb_types.Function)
+    cached = [d for d in vars(_newmark).values() if isinstance(getattr(d, "_cache", None), FunctionCache)]
+    assert any(d is _newmark.newmark_run for d in cached)
+    for kernel in cached:
+        for signature in kernel.signatures:
+            assert not any(isinstance(t, function_types) for t in signature), (kernel, signature)
+
+
 def test_steady_state_not_reached_warns():
     # an undamped linear oscillator never settles
     osc = Oscillator(1.0, 0.0, 1e4)

@@ -11,8 +11,18 @@ Adding a force element type: write ``_xxx_force`` and (if it has internal
 states) ``_xxx_rate`` below, add one branch to ``_force`` and ``_rate`` and a
 class with the same kind code in :mod:`.forces`.  Users' own stateless
 elements arrive as one compiled function ``custom(slot, p, y, yd)`` (see
-:func:`custom_dispatcher`), passed to the integrator as an argument.
+:func:`integrator_kernels`).
+
+That function is a compile-time global of the kernels, never an argument:
+numba keys its on-disk cache by the argument types, and a function's type is
+new in every process, so a function argument made every process recompile
+the integrator (about 4 s) and add a cache file, and once a user's function
+was in the cache index, saving any new entry failed ("underlying object has
+vanished").  The module-level kernels call ``no_custom`` and are cached; a
+user's elements get their own uncompiled-to-disk copies of the kernels.
 """
+import types
+
 import numpy as np
 from numba import njit
 
@@ -149,8 +159,13 @@ def no_custom(slot, p, y, yd):
     return np.nan, np.nan, np.nan
 
 
+# The custom dispatcher the module-level kernels are compiled against; the
+# copies made by ``integrator_kernels`` see another one under this name.
+custom_force = no_custom
+
+
 @njit(**_JIT)
-def _force(kind, p, y, yd, z, dfdz, custom):
+def _force(kind, p, y, yd, z, dfdz):
     if kind == KIND_BOUC_WEN:
         return _bouc_wen_force(p, y, yd, z, dfdz)
     elif kind == KIND_CUBIC_STIFFNESS:
@@ -168,7 +183,7 @@ def _force(kind, p, y, yd, z, dfdz, custom):
     elif kind == KIND_STIFFNESS_DRIFT:
         return _drift_force(p, y, yd, z, dfdz)
     elif kind == KIND_CUSTOM:
-        return custom(int(p[0]), p[1:], y, yd)
+        return custom_force(int(p[0]), p[1:], y, yd)
     return np.nan, np.nan, np.nan  # unknown kind: poison the result, never hang
 
 
@@ -185,33 +200,46 @@ def _rate(kind, p, y, yd, z, g, dgdy, dgdyd, dgdz):
             g[j] = np.nan
 
 
-_CUSTOM_DISPATCHERS = {}
+_CUSTOM_KERNELS = {}
 
 
 def custom_dispatcher(functions):
-    """One compiled ``custom(slot, p, y, yd)`` calling ``functions[slot]``.
+    """One compiled ``custom(slot, p, y, yd)`` calling ``functions[slot]``."""
+    head = functions[0]
+    rest = custom_dispatcher(functions[1:]) if len(functions) > 1 else no_custom
 
-    The integrator takes a single function argument, so several custom
-    elements are chained into one dispatcher; it is built once per tuple of
-    functions (each new one costs a compilation of the integrator).
+    @njit(nogil=True)
+    def dispatch(slot, p, y, yd):
+        if slot == 0:
+            return head(p, y, yd)
+        return rest(slot - 1, p, y, yd)
+
+    return dispatch
+
+
+def integrator_kernels(functions=()):
+    """``(newmark_run, stateless_forces)`` for an oscillator whose custom
+    elements are ``functions`` (compiled ``f(p, y, yd)``), in slot order.
+
+    Without custom elements these are the module's cached kernels. With
+    them, the kernels are recompiled (once per tuple of functions, not
+    cached on disk) with ``custom_force`` bound to a dispatcher of those
+    functions.
     """
     functions = tuple(functions)
     if not functions:
-        return no_custom
+        return newmark_run, stateless_forces
     key = tuple(id(f) for f in functions)
-    if key not in _CUSTOM_DISPATCHERS:
-        head = functions[0]
-        rest = custom_dispatcher(functions[1:])
-
-        @njit(nogil=True)
-        def dispatch(slot, p, y, yd):
-            if slot == 0:
-                return head(p, y, yd)
-            return rest(slot - 1, p, y, yd)
-
-        # Keep the functions alive with the key so ids are never reused.
-        _CUSTOM_DISPATCHERS[key] = (dispatch, functions)
-    return _CUSTOM_DISPATCHERS[key][0]
+    if key not in _CUSTOM_KERNELS:
+        namespace = dict(globals(), custom_force=custom_dispatcher(functions))
+        # numba reads a kernel's globals when it compiles, so every copy,
+        # made in the shared namespace, calls the other copies.
+        for name in ("_force", "_total_force_and_rates", "newmark_run", "stateless_forces"):
+            py = globals()[name].py_func
+            namespace[name] = njit(nogil=True)(types.FunctionType(py.__code__, namespace, py.__name__))
+        # Keep the functions alive with the key so their ids are never reused.
+        _CUSTOM_KERNELS[key] = ((namespace["newmark_run"], namespace["stateless_forces"]), functions)
+    return _CUSTOM_KERNELS[key][0]
 
 
 # --------------------------------------------------------------------------
@@ -251,14 +279,13 @@ def _solve_inplace(a, b, n):
 
 
 @njit(**_JIT)
-def _total_force_and_rates(kinds, p_off, params, z_off, y, yd, z, zd, dfdz, dgdy, dgdyd, dgdz,
-                           custom):
+def _total_force_and_rates(kinds, p_off, params, z_off, y, yd, z, zd, dfdz, dgdy, dgdyd, dgdz):
     """Sum of element forces at (y, yd, z); fills the state rates zd."""
     total = 0.0
     for e in range(kinds.shape[0]):
         a, b = z_off[e], z_off[e + 1]
         pe = params[p_off[e]:p_off[e + 1]]
-        f, _, _ = _force(kinds[e], pe, y, yd, z[a:b], dfdz[a:b], custom)
+        f, _, _ = _force(kinds[e], pe, y, yd, z[a:b], dfdz[a:b])
         total += f
         if b > a:
             _rate(kinds[e], pe, y, yd, z[a:b], zd[a:b], dgdy[a:b], dgdyd[a:b], dgdz[a:b, a:b])
@@ -270,7 +297,7 @@ def _total_force_and_rates(kinds, p_off, params, z_off, y, yd, z, zd, dfdz, dgdy
 # --------------------------------------------------------------------------
 @njit(**_JIT)
 def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
-                init_accel, y_out, yd_out, z_out, rtol, max_iter, custom):
+                init_accel, y_out, yd_out, z_out, rtol, max_iter):
     """Integrate ``n_steps`` steps of length ``h`` from ``state`` (updated in place).
 
     Step ``i`` goes from time ``i h`` to ``(i + 1) h`` with input
@@ -309,7 +336,7 @@ def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
     if init_accel:
         # Start from equilibrium of the equation of motion at t = 0.
         ftot = _total_force_and_rates(kinds, p_off, params, z_off, y, yd, z, zd,
-                                      dfdz, dgdy, dgdyd, dgdz, custom)
+                                      dfdz, dgdy, dgdyd, dgdz)
         ydd = (u[0] - c * yd - k * y - ftot) / m
 
     peak[0] = abs(y)
@@ -352,7 +379,7 @@ def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
                 a, b = z_off[e], z_off[e + 1]
                 pe = params[p_off[e]:p_off[e + 1]]
                 ze = q[1 + a:1 + b]
-                f, dfdy, dfdyd = _force(kinds[e], pe, y1, yd1, ze, dfdz[a:b], custom)
+                f, dfdy, dfdyd = _force(kinds[e], pe, y1, yd1, ze, dfdz[a:b])
                 res[0] += f
                 jac[0, 0] += dfdy + dfdyd * c_vel
                 for j in range(a, b):
@@ -399,7 +426,7 @@ def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
         if nz > 0:
             # Rates at the converged point, as the next step's trapezoid needs.
             _total_force_and_rates(kinds, p_off, params, z_off, y, yd, z, zd,
-                                   dfdz, dgdy, dgdyd, dgdz, custom)
+                                   dfdz, dgdy, dgdyd, dgdz)
         peak[0] = max(peak[0], abs(y))
         for j in range(nz):
             peak[1 + j] = max(peak[1 + j], abs(z[j]))
@@ -414,7 +441,7 @@ def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
 
 
 @njit(**_JIT)
-def stateless_forces(kinds, p_off, params, z_off, y, yd, custom):
+def stateless_forces(kinds, p_off, params, z_off, y, yd):
     """Total force of the elements without internal states at each sample
     of a motion ``(y, yd)`` (elements with states are skipped)."""
     out = np.zeros(y.shape[0])
@@ -425,6 +452,6 @@ def stateless_forces(kinds, p_off, params, z_off, y, yd, custom):
             continue
         pe = params[p_off[e]:p_off[e + 1]]
         for i in range(y.shape[0]):
-            f, _, _ = _force(kinds[e], pe, y[i], yd[i], empty, dfdz, custom)
+            f, _, _ = _force(kinds[e], pe, y[i], yd[i], empty, dfdz)
             out[i] += f
     return out

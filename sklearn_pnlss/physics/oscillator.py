@@ -8,7 +8,7 @@ from scipy import fft as sp_fft
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.utils import check_random_state
 
-from ._newmark import STATE_Z, custom_dispatcher, newmark_run, stateless_forces
+from ._newmark import STATE_Z, integrator_kernels
 from ._shooting import PeriodShooter
 from .forces import pack_forces
 from .resampling import _check_signal, check_factors, decimate_fir, upsample_fft
@@ -160,7 +160,7 @@ class Oscillator:
         self.stiffness = float(stiffness)
         self.forces = tuple(forces)
         self._packed = pack_forces(self.forces)
-        self._custom = custom_dispatcher(self._packed[4])
+        self._newmark_run, self._stateless_forces = integrator_kernels(self._packed[4])
 
     def __repr__(self):
         return (
@@ -195,8 +195,8 @@ class Oscillator:
         y = np.ascontiguousarray(y, dtype=np.float64)
         yd = np.ascontiguousarray(yd, dtype=np.float64)
         kinds, p_off, params, z_off, _ = self._packed
-        return self.damping * yd + self.stiffness * y + stateless_forces(
-            kinds, p_off, params, z_off, y, yd, self._custom)
+        return self.damping * yd + self.stiffness * y + self._stateless_forces(
+            kinds, p_off, params, z_off, y, yd)
 
     def with_forces(self, forces, **linear):
         """A copy with other force elements (and optionally other ``mass``,
@@ -211,10 +211,10 @@ class Oscillator:
         y = np.empty(n_out)
         yd = np.empty(n_out)
         z = np.empty((n_out, self.n_internal_states))
-        n_failed, _ = newmark_run(
+        n_failed, _ = self._newmark_run(
             u_fine, n_steps, h, self.mass, self.damping, self.stiffness,
             kinds, p_off, params, z_off, state, init_accel, y, yd, z,
-            _NEWTON_RTOL, _NEWTON_MAX_ITER, self._custom,
+            _NEWTON_RTOL, _NEWTON_MAX_ITER,
         )
         if not (np.all(np.isfinite(y)) and np.all(np.isfinite(state))):
             raise FloatingPointError(
