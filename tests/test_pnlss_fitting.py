@@ -200,3 +200,13 @@ def test_a_start_that_diverges_is_a_clear_error():
     bla.A_ = 1.5 * np.eye(3)  # unstable
     with pytest.raises(ValueError, match="linear start diverges"):
         PNLSSRegressor(3, period=N, max_iter=3, n_transient=0).fit(attach_stage(X, bla), y)
+
+
+def test_threads_over_signals_give_the_same_fit():
+    truth = _truth(np.random.default_rng(3))
+    X, y = _data(truth, n_realizations=4, noise=0.01)
+    fits = [PNLSSRegressor(3, degrees=(2, 3), period=N, max_iter=8, n_jobs=n_jobs).fit(X, y)
+            for n_jobs in (None, 2)]
+    np.testing.assert_array_equal(fits[0].cost_history_, fits[1].cost_history_)
+    np.testing.assert_allclose(fits[1].E_, fits[0].E_, rtol=1e-12, atol=0)
+    assert fits[1].cost_history_[-1] < 0.9 * fits[1].cost_history_[0]  # it did fit

@@ -76,7 +76,7 @@ class StateSpaceRegressorBase(SignalRegressorBase):
                 Xn, yn, period=period, n_transient=n_tr if period else 0,
                 n_skip=0 if self.n_transient == "auto" else int(self.n_transient),
                 average=self.average_periods, time_weights=weights, freq_weight=freq_weight,
-            ))
+            ), n_threads=self._segment_threads())
 
         # The noise-weighted cost, dominated by the quietest bins, has poor
         # basins far from its optimum: from the linear start, LM stalls well
@@ -86,6 +86,11 @@ class StateSpaceRegressorBase(SignalRegressorBase):
         if freq_weight is not None:
             stages.append(objective(freq_weight))
         return stages
+
+    def _segment_threads(self):
+        """Threads over the training segments (subclasses with an ``n_jobs``
+        for something else keep 1)."""
+        return 1
 
     def _check_time_weight(self, time_weight, y_list):
         if time_weight is None:

@@ -10,9 +10,12 @@ optionally weighted
   that unit weights at all bins give back the time-domain cost (Parseval).
 
 The Jacobian is used through the normal equations J^T J and J^T e,
-accumulated segment by segment: only one segment's Jacobian is ever in
-memory, whatever the number of signals.
+accumulated segment by segment: only one segment's Jacobian per thread is
+ever in memory, whatever the number of signals. Segments can be processed by
+several threads: the compiled kernels and the BLAS products release the GIL.
 """
+from concurrent.futures import ThreadPoolExecutor
+
 import numpy as np
 
 __all__ = ["SimulationError", "weigh"]
@@ -42,32 +45,45 @@ class SimulationError:
     Parameters
     ----------
     segments : list of Segment
+    n_threads : int, default=1
+        Threads over the segments.
     """
 
-    def __init__(self, segments):
+    def __init__(self, segments, n_threads=1):
         self.segments = segments
+        self.n_threads = max(1, min(int(n_threads), len(segments)))
+
+    def _map(self, function):
+        if self.n_threads == 1:
+            return [function(seg) for seg in self.segments]
+        with ThreadPoolExecutor(self.n_threads) as pool:
+            return list(pool.map(function, self.segments))
 
     def residual(self, model):
         """Weighted residual vector, or None when the model diverges."""
-        out = []
-        for seg in self.segments:
+
+        def one(seg):
             err = model.segment_error(seg)
             if err is None or not np.all(np.isfinite(err)):
                 return None
-            out.append(weigh(seg, err[:, :, None]).ravel())
-        return np.concatenate(out)
+            return weigh(seg, err[:, :, None]).ravel()
+
+        out = self._map(one)
+        return None if any(e is None for e in out) else np.concatenate(out)
 
     def normal_equations(self, model):
         """J^T J and J^T e of the weighted residual at ``model``, or None when
         the model diverges."""
-        G = np.zeros((model.n_params, model.n_params))
-        g = np.zeros(model.n_params)
-        for seg in self.segments:
+
+        def one(seg):
             err = model.segment_error(seg)
             if err is None:
                 return None
             e = weigh(seg, err[:, :, None])[:, 0]
             J = weigh(seg, model.segment_jacobian(seg))
-            G += J.T @ J
-            g += J.T @ e
-        return G, g
+            return J.T @ J, J.T @ e
+
+        parts = self._map(one)
+        if any(part is None for part in parts):
+            return None
+        return sum(G for G, _ in parts), sum(g for _, g in parts)
