@@ -57,19 +57,19 @@ def test_states_and_input_degrees_2_3(training, official):
 
 @pytest.mark.slow
 def test_states_degrees_3_5_7(official):
-    """217 parameters: five realisations to fit and a sixth to keep the best
-    iterate (on two realisations the model fits the training record ever
-    better while its validation error rises after 30 iterations, and it
-    leaves its stable range on new inputs). Trained at 55 N, as the seed
-    paper does, so the test multisine's peaks stay inside the training
-    range. Measured: -96.60 dB / -103.69 dB (best iterate 119), 1-4 minutes;
-    at 50 N -96.31 / -104.15 dB. The published figure is -98.32 dB on the
-    multisine; that gap is still open."""
-    data = make_bouc_wen(n_realizations=6, n_periods=2, rms=55.0, random_state=0)
-    model = PNLSSRegressor(3, degrees=(3, 5, 7), variables="states", period=data.period, max_iter=200)
-    model.fit(data.X_train[:5], data.y_train[:5],
-              X_val=data.X_train[5:, data.period:], y_val=data.y_train[5:, data.period:])
+    """217 parameters, twenty realisations to fit and two more to keep the
+    best iterate. Its error comes from the rare large excursions, which each
+    realisation has its own: on five realisations it fits its own data 1.6
+    dB better than new ones (-97.37 dB on the test multisine), on twenty the
+    gap is 0.5 dB. Measured: -98.02 dB / -104.27 dB, best iterate 201; 5 to
+    10 minutes on two cores. On another draw (random_state=7) the same
+    recipe stays at -93.9 dB: the path passes through models that diverge on
+    new realisations (see the user guide)."""
+    data = make_bouc_wen(n_realizations=22, n_periods=2, random_state=0, n_jobs=-1)
+    P = data.period
+    model = PNLSSRegressor(3, degrees=(3, 5, 7), variables="states", period=P, max_iter=300, n_jobs=-1)
+    model.fit(data.X_train[:20], data.y_train[:20], X_val=data.X_train[20:, P:], y_val=data.y_train[20:, P:])
     assert model.n_params_ == 217
     multisine, sweep = _errors(model, official)
-    assert multisine < -96.5
-    assert sweep < -103.0
+    assert multisine < -98.0
+    assert sweep < -103.5
