@@ -207,6 +207,7 @@ def test_threads_over_signals_give_the_same_fit():
     X, y = _data(truth, n_realizations=4, noise=0.01)
     fits = [PNLSSRegressor(3, degrees=(2, 3), period=N, max_iter=8, n_jobs=n_jobs).fit(X, y)
             for n_jobs in (None, 2)]
-    np.testing.assert_array_equal(fits[0].cost_history_, fits[1].cost_history_)
-    np.testing.assert_allclose(fits[1].E_, fits[0].E_, rtol=1e-12, atol=0)
+    # Equal to rounding: the threads run BLAS single-threaded, which sums in another order.
+    np.testing.assert_allclose(fits[1].cost_history_, fits[0].cost_history_, rtol=1e-12)
+    np.testing.assert_allclose(fits[1].E_, fits[0].E_, rtol=1e-8, atol=1e-12 * np.abs(fits[0].E_).max())
     assert fits[1].cost_history_[-1] < 0.9 * fits[1].cost_history_[0]  # it did fit
