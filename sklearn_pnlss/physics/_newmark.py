@@ -19,7 +19,7 @@ new in every process, so a function argument made every process recompile
 the integrator (about 4 s) and add a cache file, and once a user's function
 was in the cache index, saving any new entry failed ("underlying object has
 vanished").  The module-level kernels call ``no_custom`` and are cached; a
-user's elements get their own uncompiled-to-disk copies of the kernels.
+user's elements get uncached copies of the kernels that call them.
 """
 import types
 
