@@ -61,8 +61,8 @@ def test_states_degrees_3_5_7(official):
     best iterate. Its error comes from the rare large excursions, which each
     realisation has its own: on five realisations it fits its own data 1.6
     dB better than new ones (-97.37 dB on the test multisine), on twenty the
-    gap is 0.5 dB. Measured: -98.02 dB / -104.27 dB, best iterate 201; 5 to
-    10 minutes on two cores. On another draw (random_state=7) the same
+    gap is 0.5 dB. Measured: -98.02 dB / -104.27 dB, best iterate 201; 2.6
+    minutes on two idle cores. On another draw (random_state=7) the same
     recipe stays at -93.9 dB: the path passes through models that diverge on
     new realisations (see the user guide)."""
     data = make_bouc_wen(n_realizations=22, n_periods=2, random_state=0, n_jobs=-1)
