@@ -288,7 +288,9 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         )
 
     def _segment_threads(self):
-        return effective_n_jobs(self.n_jobs)
+        # None is 1 even inside a joblib backend context (a grid search's
+        # workers): threads there would oversubscribe the workers' cores.
+        return 1 if self.n_jobs is None else effective_n_jobs(self.n_jobs)
 
     def _summary_structure(self):
         return {
