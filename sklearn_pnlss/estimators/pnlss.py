@@ -94,7 +94,7 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         Threads over the training signals for the simulations and the
         Jacobian (the compiled kernels and the BLAS products release the GIL;
         each thread runs BLAS single-threaded). Worth it with many signals:
-        twenty Bouc-Wen realisations, degrees (3, 5, 7), two cores: 1.3 to
+        twenty Bouc-Wen realisations, degrees (3, 5, 7), two cores: 1.2 to
         1.5 times faster per iteration. None means 1, -1 all cores; leave it
         at None inside a parallel grid search.
     verbose : int, default=0
