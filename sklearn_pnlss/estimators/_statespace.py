@@ -154,11 +154,13 @@ class StateSpaceRegressorBase(SignalRegressorBase):
         var = np.maximum(var, 1e-12 * np.mean(var[lo : hi + 1]) + np.finfo(float).tiny)
         return lambda n_averaged: in_band * n_averaged / var
 
-    def _optimise(self, model, objectives, val):
+    def _optimise(self, model, objectives, val, max_iter=None):
         """Levenberg-Marquardt through each objective in turn, each stage
-        starting where the previous one ended; keeps the last iterate, or
-        the one best on the validation signals over all stages. Pure (no
-        attribute set), so that several starts can run in parallel."""
+        starting where the previous one ended and running at most
+        ``max_iter`` (default ``self.max_iter``) iterations; keeps the last
+        iterate, or the one best on the validation signals over all stages.
+        Pure (no attribute set), so that several starts can run in parallel."""
+        max_iter = self.max_iter if max_iter is None else max_iter
         val_history, best = [], {"err": np.inf, "theta": model.theta, "it": 0}
         done = 0  # iterations of the earlier stages
 
@@ -196,7 +198,7 @@ class StateSpaceRegressorBase(SignalRegressorBase):
             result = levenberg_marquardt(
                 lambda th, obj=objective: obj.residual(model.with_theta(th)),
                 lambda th, obj=objective: obj.normal_equations(model.with_theta(th)),
-                theta, n_drop=self._n_null_directions(model), max_iter=self.max_iter, tol=self.tol, callback=callback,
+                theta, n_drop=self._n_null_directions(model), max_iter=max_iter, tol=self.tol, callback=callback,
             )
             theta = result.theta
             done += result.n_iter

