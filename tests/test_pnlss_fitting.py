@@ -233,7 +233,14 @@ def test_growing_degrees_chains_the_stages():
     truth.E[:, truth.exE.sum(axis=1) == 2] = 0.0  # odd, as degrees (3, 5) can follow
     X, y = _data(truth, noise=0.001, rms=1.0)
     X_val, y_val = _data(truth, n_periods=1, n_realizations=1, seed=7, rms=1.0)
-    assert PNLSSRegressor(3, degrees=(3, 2), period=N, max_iter=0).fit(X, y).degree_stages_ == [(2, 3)]
+    def stages(**params):
+        return PNLSSRegressor(3, period=N, max_iter=0, **params).fit(X, y).degree_stages_
+
+    assert stages(degrees=(3, 2)) == [(2, 3)]
+    assert stages(degrees=(2, 3, 5)) == [(2, 3), (2, 3, 5)]
+    assert stages(degrees=(3, 5, 7)) == [(3,), (3, 5), (3, 5, 7)]
+    assert stages(degrees=(2, 3), grow_degrees=True) == [(2,), (2, 3)]
+    assert stages(degrees=(3, 5, 7), grow_degrees=False) == [(3, 5, 7)]
     direct = PNLSSRegressor(3, degrees=(3, 5), period=N, max_iter=20, grow_degrees=False).fit(X, y, X_val=X_val, y_val=y_val)
     grown = PNLSSRegressor(3, degrees=(3, 5), period=N, max_iter=20).fit(X, y, X_val=X_val, y_val=y_val)
     assert direct.degree_stages_ == [(3, 5)] and grown.degree_stages_ == [(3,), (3, 5)]
