@@ -56,20 +56,24 @@ def test_states_and_input_degrees_2_3(training, official):
 
 
 @pytest.mark.slow
-def test_states_degrees_3_5_7(official):
+@pytest.mark.parametrize("random_state", [0, 7])
+def test_states_degrees_3_5_7(official, random_state):
     """217 parameters, twenty realisations to fit and two more to keep the
-    best iterate. Its error comes from the rare large excursions, which each
+    best iterate, the degrees grown one at a time (the default above degree
+    3). Its error comes from the rare large excursions, which each
     realisation has its own: on five realisations it fits its own data 1.6
-    dB better than new ones (-97.37 dB on the test multisine), on twenty the
-    gap is 0.5 dB. Measured: -98.02 dB / -104.27 dB, best iterate 201; 2.6
-    minutes on two idle cores. On another draw (random_state=7) the same
-    recipe stays at -93.9 dB: the path passes through models that diverge on
-    new realisations (see the user guide)."""
-    data = make_bouc_wen(n_realizations=22, n_periods=2, random_state=0, n_jobs=-1)
+    dB better than new ones, on twenty the gap is 0.5 dB. Two draws of the
+    data: fitted directly, the second (random_state=7) stays at -93.7 dB,
+    its path passing through models that diverge on new realisations (see
+    the user guide). Measured grown: -98.56 / -104.83 dB (random_state=0)
+    and -98.58 / -104.75 dB (random_state=7), about 3.5 minutes each on two
+    idle cores (python benchmarks/bench_pnlss.py --accuracy-only)."""
+    data = make_bouc_wen(n_realizations=22, n_periods=2, random_state=random_state, n_jobs=-1)
     P = data.period
     model = PNLSSRegressor(3, degrees=(3, 5, 7), variables="states", period=P, max_iter=300, n_jobs=-1)
     model.fit(data.X_train[:20], data.y_train[:20], X_val=data.X_train[20:, P:], y_val=data.y_train[20:, P:])
     assert model.n_params_ == 217
+    assert model.degree_stages_ == [(3,), (3, 5), (3, 5, 7)]
     multisine, sweep = _errors(model, official)
-    assert multisine < -98.0
-    assert sweep < -103.5
+    assert multisine < -98.3
+    assert sweep < -104.5
