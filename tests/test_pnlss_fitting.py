@@ -233,6 +233,7 @@ def test_growing_degrees_chains_the_stages():
     truth.E[:, truth.exE.sum(axis=1) == 2] = 0.0  # odd, as degrees (3, 5) can follow
     X, y = _data(truth, noise=0.001, rms=1.0)
     X_val, y_val = _data(truth, n_periods=1, n_realizations=1, seed=7, rms=1.0)
+
     def stages(**params):
         return PNLSSRegressor(3, period=N, max_iter=0, **params).fit(X, y).degree_stages_
 
