@@ -42,22 +42,32 @@ def _stack(x, u, s):
 
 
 @_jit
-def _branches(V, G, s, zp, g, dg):
-    """Branch values ``g``, derivatives ``dg`` and powers
-    ``zp[b, k] = z_b ** (k + 1)`` at ``z = V^T s``."""
+def _branches(V, G, lo, hi, linear, s, zp, g, dg):
+    """Branch values ``g``, their derivatives ``dg`` with respect to the
+    branch input, and ``zp[b, k]``, the derivative of ``g_b`` with respect to
+    ``G[b, k]``, at ``z = V^T s`` (continued outside ``[lo, hi]``)."""
     r, d = G.shape
     for b in range(r):
         z = 0.0
         for j in range(s.shape[0]):
             z += V[j, b] * s[j]
+        zc = min(max(z, lo[b]), hi[b])  # the point the polynomial is evaluated at
         val = 0.0
         der = 0.0
-        zk = 1.0  # z ** k
+        zk = 1.0  # zc ** k
         for k in range(d):
             der += (k + 1) * G[b, k] * zk
-            zk *= z
-            zp[b, k] = zk
+            zp[b, k] = zk * zc
+            if zc != z and linear:
+                # Tangent continuation: g(zc) + g'(zc) (z - zc).
+                zp[b, k] += (k + 1) * zk * (z - zc)
+            zk *= zc
             val += G[b, k] * zk
+        if zc != z:
+            if linear:
+                val += der * (z - zc)
+            else:
+                der = 0.0  # held at the edge: no dependence on z
         g[b] = val
         dg[b] = der
 
@@ -104,7 +114,7 @@ def _branch_direct(w, dg, s, zp, oV, oG, row):
 
 
 @numba.njit(cache=True, nogil=True)
-def decoupled_simulate(A, B, C, D, Wx, Wy, V, G, U, x0):
+def decoupled_simulate(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, U, x0):
     """Simulate; returns (Y, X, n_ok, x_end). n_ok < len(U) means the state
     left the range (divergence) after sample n_ok - 1."""
     N, m = U.shape
@@ -121,7 +131,7 @@ def decoupled_simulate(A, B, C, D, Wx, Wy, V, G, U, x0):
     x_next = np.empty(n)
     for t in range(N):
         _stack(x, U[t], s)
-        _branches(V, G, s, zp, g, dg)
+        _branches(V, G, lo, hi, linear, s, zp, g, dg)
         X[t] = x
         _affine(C, x, D, U[t], Wy, g, Y[t])
         _affine(A, x, B, U[t], Wx, g, x_next)
@@ -133,7 +143,7 @@ def decoupled_simulate(A, B, C, D, Wx, Wy, V, G, U, x0):
 
 
 @numba.njit(cache=True, nogil=True)
-def decoupled_jacobian(A, B, C, D, Wx, Wy, V, G, U, x0, n_skip, out_branch_params, J):
+def decoupled_jacobian(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, U, x0, n_skip, out_branch_params, J):
     """Output sensitivities dy(t)/dtheta for t >= n_skip, written to
     J[(t - n_skip), :, :] (shape (N - n_skip, p, n_theta)). ``Wy`` is a
     parameter (the last block) only when ``out_branch_params``; otherwise it
@@ -164,7 +174,7 @@ def decoupled_jacobian(A, B, C, D, Wx, Wy, V, G, U, x0, n_skip, out_branch_param
     for t in range(N):
         u = U[t]
         _stack(x, u, s)
-        _branches(V, G, s, zp, g, dg)
+        _branches(V, G, lo, hi, linear, s, zp, g, dg)
         _linearised(A, Wx, dg, V, Ax)
         if t >= n_skip:
             _linearised(C, Wy, dg, V, Cx)

@@ -8,6 +8,14 @@ simulated output comes from the sensitivity recursion
 dx/dtheta(t+1) = (A + E dzeta/dx) dx/dtheta(t) + direct term,
 one pass over time for all parameters at once.
 
+The monomials are evaluated at ``s`` held inside its trusted box
+``[lo, hi]`` (the range each variable covered in training): outside it a
+variable is held at the edge, so ``zeta`` and ``eta`` are bounded and a
+stable ``A`` gives a bounded state for every bounded input; a held state has
+no influence on the monomials (zero derivative). An infinite box is the plain
+polynomial. The box is a constant of the model, not a parameter, so the
+Jacobian stays exact.
+
 The loops are written out (no ``@`` on small arrays): numba's matrix
 products allocate at every sample, which cost more than the arithmetic.
 """
@@ -77,6 +85,24 @@ def _stack(x, u, s):
 
 
 @_jit
+def _hold(s, lo, hi, inside):
+    """s clipped to [lo, hi] in place; ``inside[v]`` False where it was."""
+    for v in range(s.shape[0]):
+        c = min(max(s[v], lo[v]), hi[v])
+        inside[v] = c == s[v]
+        s[v] = c
+
+
+@_jit
+def _zero_held(dterms, inside):
+    """No dependence of the monomials on a state held at its edge."""
+    for k in range(dterms.shape[1]):
+        if not inside[k]:
+            for j in range(dterms.shape[0]):
+                dterms[j, k] = 0.0
+
+
+@_jit
 def _affine(M, v, N, w, P, z, out):
     """out = M v + N w + P z (the state or output update)."""
     for i in range(out.shape[0]):
@@ -116,7 +142,7 @@ def _propagate(M, S, out):
 
 
 @numba.njit(cache=True, nogil=True)
-def pnlss_simulate(A, B, C, D, E, F, exE, exF, U, x0):
+def pnlss_simulate(A, B, C, D, E, F, exE, exF, lo, hi, U, x0):
     """Simulate; returns (Y, X, n_ok, x_end). n_ok < len(U) means the state
     left the range (divergence) after sample n_ok - 1."""
     N, m = U.shape
@@ -124,6 +150,7 @@ def pnlss_simulate(A, B, C, D, E, F, exE, exF, U, x0):
     p = C.shape[0]
     pw = np.empty((n + m, _max_degree(exE, exF) + 1))
     s = np.empty(n + m)
+    inside = np.empty(n + m, dtype=np.bool_)
     zeta = np.empty(exE.shape[0])
     eta = np.empty(exF.shape[0])
     Y = np.empty((N, p))
@@ -132,6 +159,7 @@ def pnlss_simulate(A, B, C, D, E, F, exE, exF, U, x0):
     x_next = np.empty(n)
     for t in range(N):
         _stack(x, U[t], s)
+        _hold(s, lo, hi, inside)
         _powers(s, pw)
         _monomial_values(exE, pw, zeta)
         _monomial_values(exF, pw, eta)
@@ -146,7 +174,7 @@ def pnlss_simulate(A, B, C, D, E, F, exE, exF, U, x0):
 
 
 @numba.njit(cache=True, nogil=True)
-def pnlss_jacobian(A, B, C, D, E, F, exE, exF, U, x0, n_skip, J):
+def pnlss_jacobian(A, B, C, D, E, F, exE, exF, lo, hi, U, x0, n_skip, J):
     """Output sensitivities dy(t)/dtheta for t >= n_skip, written to
     J[(t - n_skip), :, :] (shape (N - n_skip, p, n_theta))."""
     N, m = U.shape
@@ -161,6 +189,7 @@ def pnlss_jacobian(A, B, C, D, E, F, exE, exF, U, x0, n_skip, J):
     oF = oD + p * m
     pw = np.empty((n + m, _max_degree(exE, exF) + 1))
     s = np.empty(n + m)
+    inside = np.empty(n + m, dtype=np.bool_)
     zeta = np.empty(nE)
     dzeta = np.empty((nE, n))
     eta = np.empty(nF)
@@ -174,13 +203,16 @@ def pnlss_jacobian(A, B, C, D, E, F, exE, exF, U, x0, n_skip, J):
     for t in range(N):
         u = U[t]
         _stack(x, u, s)
+        _hold(s, lo, hi, inside)
         _powers(s, pw)
         _monomial_values(exE, pw, zeta)
         _state_derivatives(exE, pw, n, dzeta)
+        _zero_held(dzeta, inside)
         _linearised(A, E, dzeta, Ax)
         if t >= n_skip:
             _monomial_values(exF, pw, eta)
             _state_derivatives(exF, pw, n, deta)
+            _zero_held(deta, inside)
             _linearised(C, F, deta, Cx)
             Jt = J[t - n_skip]
             _propagate(Cx, Sx, Jt)

@@ -4,7 +4,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._decoupled_kernels import decoupled_jacobian, decoupled_simulate
-from .model_base import DivergenceError, Segment, StateSpaceModel
+from .model_base import DivergenceError, Segment, StateSpaceModel, unbounded
 
 __all__ = ["DecoupledModel", "DivergenceError", "Segment"]
 
@@ -34,6 +34,14 @@ class DecoupledModel(StateSpaceModel):
         ``G[l, k]`` multiplies ``z_l ** (k + 1)``.
     output_branches : bool, default=False
         Whether ``Wy`` is a parameter.
+    bounds : ndarray of shape (r, 2) or None, default=None
+        Trusted range ``[lo, hi]`` of each branch input; outside it the
+        branch is continued (see ``linear_extrapolation``). None: no bounds,
+        the plain polynomials.
+    linear_extrapolation : bool, default=False
+        Outside ``bounds``, continue each branch along its edge tangent
+        instead of holding its edge value. Holding keeps ``g`` bounded, so a
+        stable ``A`` gives a bounded state for every bounded input.
 
     Notes
     -----
@@ -51,16 +59,20 @@ class DecoupledModel(StateSpaceModel):
     V: np.ndarray
     G: np.ndarray
     output_branches: bool = False
+    bounds: np.ndarray | None = None
+    linear_extrapolation: bool = False
 
     def __post_init__(self):
-        # ``copy`` of the base copies every field with np.copy; keep the flag
-        # a plain bool (numba specialises the kernel on its type).
+        # ``copy`` of the base copies every field with np.copy; keep the flags
+        # plain bools (numba specialises the kernel on their type).
         self.output_branches = bool(self.output_branches)
+        self.linear_extrapolation = bool(self.linear_extrapolation)
         n, m, p = self.A.shape[0], self.B.shape[1], self.C.shape[0]
         r, d = self.G.shape
+        self.bounds = unbounded(r) if self.bounds is None else np.array(self.bounds, dtype=float)
         expected = {
             "A": (n, n), "B": (n, m), "C": (p, n), "D": (p, m),
-            "Wx": (n, r), "Wy": (p, r), "V": (n + m, r), "G": (r, d),
+            "Wx": (n, r), "Wy": (p, r), "V": (n + m, r), "G": (r, d), "bounds": (r, 2),
         }
         for name, shape in expected.items():
             if getattr(self, name).shape != shape:
@@ -85,10 +97,20 @@ class DecoupledModel(StateSpaceModel):
         when ``output_branches``."""
         return self.Wx.size + self.V.size + self.G.size + (self.Wy.size if self.output_branches else 0)
 
+    def bounded_variables(self, states_inputs):
+        """The branch inputs ``z = V^T s`` at the points ``s = [x; u]``
+        (rows): what ``bounds`` bounds."""
+        return states_inputs @ self.V
+
     def _run(self, U, x0):
-        return decoupled_simulate(self.A, self.B, self.C, self.D, self.Wx, self.Wy, self.V, self.G, U, x0)
+        lo, hi = self._bounds()
+        return decoupled_simulate(
+            self.A, self.B, self.C, self.D, self.Wx, self.Wy, self.V, self.G, lo, hi, self.linear_extrapolation, U, x0
+        )
 
     def _sensitivity(self, U, x0, n_skip, J):
+        lo, hi = self._bounds()
         decoupled_jacobian(
-            self.A, self.B, self.C, self.D, self.Wx, self.Wy, self.V, self.G, U, x0, n_skip, self.output_branches, J
+            self.A, self.B, self.C, self.D, self.Wx, self.Wy, self.V, self.G, lo, hi, self.linear_extrapolation,
+            U, x0, n_skip, self.output_branches, J,
         )

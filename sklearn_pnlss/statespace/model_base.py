@@ -12,7 +12,12 @@ from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
-__all__ = ["DivergenceError", "Segment", "StateSpaceModel"]
+__all__ = ["DivergenceError", "Segment", "StateSpaceModel", "unbounded"]
+
+
+def unbounded(k):
+    """Bounds ``[-inf, inf]`` for ``k`` variables: no trusted range."""
+    return np.tile([-np.inf, np.inf], (k, 1))
 
 
 class DivergenceError(ValueError):
@@ -39,8 +44,11 @@ class Segment:
 
 
 class StateSpaceModel:
-    """Mixin for dataclass models with matrices ``A, B, C, D`` and parameter
-    blocks named by ``_block_names``."""
+    """Mixin for dataclass models with matrices ``A, B, C, D``, parameter
+    blocks named by ``_block_names`` and ``bounds`` (k, 2): the trusted range
+    of the ``k`` variables its nonlinearity is evaluated at
+    (``bounded_variables``), outside which the nonlinearity is continued
+    (held at the edge, by default)."""
 
     _block_names: tuple = ()
 
@@ -67,6 +75,23 @@ class StateSpaceModel:
             new[name] = np.asarray(theta[i : i + M.size]).reshape(M.shape).copy()
             i += M.size
         return replace(self, **new)
+
+    def _bounds(self):
+        return np.ascontiguousarray(self.bounds[:, 0]), np.ascontiguousarray(self.bounds[:, 1])
+
+    def with_trusted_range(self, states_inputs, margin=0.0):
+        """A copy whose ``bounds`` are the range of its nonlinearity's
+        variables at the points ``states_inputs`` (rows ``[x; u]``, e.g. a
+        simulation of the training inputs), widened by ``margin`` times the
+        range's width on each side."""
+        v = self.bounded_variables(np.asarray(states_inputs, dtype=float))
+        lo, hi = v.min(axis=0), v.max(axis=0)
+        pad = margin * (hi - lo)
+        return replace(self, bounds=np.column_stack([lo - pad, hi + pad]))
+
+    def without_bounds(self):
+        """A copy with the plain polynomial nonlinearity (no trusted range)."""
+        return replace(self, bounds=unbounded(self.bounds.shape[0]))
 
     def copy(self):
         return replace(self, **{f.name: np.copy(getattr(self, f.name)) for f in fields(self)})

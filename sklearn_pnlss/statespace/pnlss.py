@@ -4,7 +4,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._pnlss_kernels import pnlss_jacobian, pnlss_simulate
-from .model_base import DivergenceError, Segment, StateSpaceModel
+from .model_base import DivergenceError, Segment, StateSpaceModel, unbounded
 
 __all__ = ["DivergenceError", "PNLSSModel", "Segment"]
 
@@ -16,6 +16,11 @@ class PNLSSModel(StateSpaceModel):
     ``exE`` / ``exF`` hold the monomial exponents over the variables
     ``[x; u]``. Parameter vector order: A, B, E, C, D, F (row-major): the
     blocks that move the state first, as the Jacobian kernel expects.
+
+    ``bounds`` (n + m, 2), default None (no bounds): the trusted box of
+    ``[x; u]``; the monomials are evaluated at ``[x; u]`` held inside it,
+    so they stay bounded (a stable ``A`` then bounds the state for every
+    bounded input). The linear terms are never held.
     """
 
     A: np.ndarray
@@ -26,11 +31,25 @@ class PNLSSModel(StateSpaceModel):
     F: np.ndarray
     exE: np.ndarray
     exF: np.ndarray
+    bounds: np.ndarray | None = None
 
     _block_names = ("A", "B", "E", "C", "D", "F")
 
+    def __post_init__(self):
+        k = self.A.shape[0] + self.B.shape[1]
+        self.bounds = unbounded(k) if self.bounds is None else np.array(self.bounds, dtype=float)
+        if self.bounds.shape != (k, 2):
+            raise ValueError(f"bounds must have shape {(k, 2)} (n_states + n_inputs, 2); got {self.bounds.shape}.")
+
+    def bounded_variables(self, states_inputs):
+        """The monomials' variables ``[x; u]`` themselves: what ``bounds``
+        bounds."""
+        return states_inputs
+
     def _run(self, U, x0):
-        return pnlss_simulate(self.A, self.B, self.C, self.D, self.E, self.F, self.exE, self.exF, U, x0)
+        lo, hi = self._bounds()
+        return pnlss_simulate(self.A, self.B, self.C, self.D, self.E, self.F, self.exE, self.exF, lo, hi, U, x0)
 
     def _sensitivity(self, U, x0, n_skip, J):
-        pnlss_jacobian(self.A, self.B, self.C, self.D, self.E, self.F, self.exE, self.exF, U, x0, n_skip, J)
+        lo, hi = self._bounds()
+        pnlss_jacobian(self.A, self.B, self.C, self.D, self.E, self.F, self.exE, self.exF, lo, hi, U, x0, n_skip, J)
