@@ -1,7 +1,7 @@
 """What the nonlinear state-space regressors share: the weighted
 simulation-error objectives on internally scaled signals, Levenberg-Marquardt
 with validation, and simulation for predict."""
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from numbers import Integral, Real
 
 import numpy as np
@@ -31,8 +31,15 @@ class LMFit:
     validation_error: float  # dB, best over the iterations; NaN without validation
 
 
+# An iterate (or a start) that runs away (diverges, or leaves its trusted
+# range by more than its width) on the validation inputs amplified by this
+# factor counts as failed: a returned model must stay sane somewhat above the
+# level it was validated at.
+AMPLIFIED_VALIDATION = 1.2
+
 # Constraints of the fit parameters every subclass has (see the docstring).
 FIT_PARAMETER_CONSTRAINTS = {
+    "range_margin": [Interval(Real, 0, None, closed="left")],
     "period": [Interval(Integral, 2, None, closed="left"), None],
     "average_periods": ["boolean"],
     "weighting": [None, StrOptions({"band", "noise"})],
@@ -53,7 +60,13 @@ class StateSpaceRegressorBase(SignalRegressorBase):
     divided by ``_u_scale`` / ``_y_scale``) and call :meth:`_fit_nonlinear`;
     the fitted model is ``_model``. They need the parameters ``period``,
     ``average_periods``, ``weighting``, ``band``, ``max_iter``, ``tol``,
-    ``n_transient`` and ``verbose``.
+    ``n_transient``, ``extrapolation``, ``range_margin`` and ``verbose``.
+
+    Levenberg-Marquardt fits the plain polynomial; every iterate scored on
+    validation signals, and the returned model, carry the trusted range of
+    their nonlinearity (the range its variables cover along the simulation of
+    the training segments, widened by ``range_margin``), continued outside
+    it as ``extrapolation`` says. Inside the range nothing changes.
     """
 
     def _fit_nonlinear(self, model, X_list, y_list, period, weights, val):
@@ -164,18 +177,21 @@ class StateSpaceRegressorBase(SignalRegressorBase):
         val_history, best = [], {"err": np.inf, "theta": model.theta, "it": 0}
         done = 0  # iterations of the earlier stages
 
+        segments = objectives[0].segments
+
         def validation_error(theta):
             if val is None:
                 return np.nan
-            cand = model.with_theta(theta)
-            try:
-                err = [
-                    cand.simulate_signal(U / self._u_scale, self.period if self._signal_is_periodic(U.shape[0]) else None)
-                    * self._y_scale - Y
-                    for U, Y in zip(*val)
-                ]
-            except DivergenceError:
-                return np.inf
+            cand = self._trusted_model(model.with_theta(theta), segments)
+            err = []
+            for U, Y in zip(*val):
+                per = self.period if self._signal_is_periodic(U.shape[0]) else None
+                try:
+                    err.append(cand.simulate_signal(U / self._u_scale, per) * self._y_scale - Y)
+                except DivergenceError:
+                    return np.inf
+                if cand.runs_away(AMPLIFIED_VALIDATION * U / self._u_scale, per):
+                    return np.inf
             return float(to_db(np.sqrt(np.mean(np.concatenate(err) ** 2))))
 
         def callback(it, theta, cost, lam):
@@ -204,11 +220,20 @@ class StateSpaceRegressorBase(SignalRegressorBase):
             done += result.n_iter
         keep, best_it = (best["theta"], best["it"]) if val is not None else (theta, done)
         return LMFit(
-            model=model.with_theta(keep), n_iter=done, best_iteration=best_it,
+            model=self._trusted_model(model.with_theta(keep), segments), n_iter=done, best_iteration=best_it,
             cost_history=np.array([h[1] for h in result.history]),
             validation_history=np.array(val_history) if val is not None else None,
             validation_error=best["err"] if val is not None else np.nan,
         )
+
+    def _trusted_model(self, model, segments):
+        """``model`` with the trusted range of its nonlinearity along its
+        simulation of the training ``segments`` (see the class docstring)."""
+        if self.extrapolation == "polynomial":
+            return model.without_bounds()
+        trajectory = np.vstack([np.hstack([model.simulate_states(seg.U), seg.U]) for seg in segments])
+        trusted = model.with_trusted_range(trajectory, self.range_margin)
+        return replace(trusted, linear_extrapolation=True) if self.extrapolation == "linear" else trusted
 
     def _set_fit_result(self, fit):
         self._model = fit.model
@@ -223,10 +248,10 @@ class StateSpaceRegressorBase(SignalRegressorBase):
         try:
             Yn = self._model.simulate_signal(Un, self.period if periodic else None)
         except DivergenceError as exc:
-            raise ValueError(
+            raise DivergenceError(
                 f"{type(self).__name__}.predict: {exc}; the input X drives the model far "
                 "outside the range it was fitted on (larger amplitude or other "
-                "frequencies than the training data)."
+                "frequencies than the training data).", sample=exc.sample,
             ) from None
         return Yn * self._y_scale
 

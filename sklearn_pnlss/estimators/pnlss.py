@@ -95,6 +95,22 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         of -93.69 dB on another draw of the data; degrees (2, 3) grown from
         degree 2 alone reach -87.95 dB instead of -90.73 dB (official
         record).
+    extrapolation : {"hold", "polynomial"}, default="hold"
+        What the polynomial does where the model's states or inputs leave
+        the range they covered in training (widened by ``range_margin``).
+        "hold": the monomials are evaluated at the states held at the edge
+        of that box, so for a bounded input they stay bounded, and a stable
+        ``A`` gives a bounded state for every bounded input: the model cannot
+        run away on a new signal of the training kind and level (bounded by
+        construction). Inside the box nothing changes. "polynomial": the
+        plain polynomial everywhere, as fitted (right when the system's
+        nonlinearity is known to be that polynomial).
+    range_margin : float, default=0.05
+        Widening of the trusted range on each side, as a fraction of its
+        width. Measured on Bouc-Wen, degrees (2, 3), official test multisine
+        (whose peaks take the states slightly past their training range):
+        0.05 gives the plain polynomial's -94.23 dB (states and input), 0
+        gives -93.97 dB.
     max_iter : int, default=100
         Levenberg-Marquardt iterations at most (of the last stage when the
         degrees grow; each earlier one runs at most ``max_iter // 2``).
@@ -131,6 +147,10 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         Monomial exponents over ``[x; u]`` of the columns of ``E_`` and ``F_``.
     linear_model_ : BLAEstimator
         The fitted linear start.
+    trusted_range_ : ndarray of shape (n_states + n_inputs, 2)
+        Box of ``[x; u]`` (user units) inside which the polynomial is
+        evaluated as fitted (see ``extrapolation``): the states' range, the
+        inputs unbounded; infinite with ``extrapolation="polynomial"``.
     n_params_, n_nonlinear_params_ : int
     n_iter_ : int
         Iterations done, all stages counted (the degrees grown one at a
@@ -164,6 +184,7 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         "variables": [StrOptions({"states_inputs", "states"})],
         "equations": [StrOptions({"state", "output", "both"})],
         "grow_degrees": ["boolean", StrOptions({"auto"})],
+        "extrapolation": [StrOptions({"hold", "polynomial"})],
         "linear_model": [None, BLAEstimator],
         "n_jobs": [Integral, None],
     }
@@ -180,6 +201,8 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         weighting=None,
         band=None,
         grow_degrees="auto",
+        extrapolation="hold",
+        range_margin=0.05,
         max_iter=100,
         tol=1e-8,
         n_transient="auto",
@@ -197,6 +220,8 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         self.weighting = weighting
         self.band = band
         self.grow_degrees = grow_degrees
+        self.extrapolation = extrapolation
+        self.range_margin = range_margin
         self.max_iter = max_iter
         self.tol = tol
         self.n_transient = n_transient
@@ -368,6 +393,7 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         self.F_ = Sy @ mdl.F / np.prod(var_scale ** mdl.exF, axis=1)
         self.exponents_E_ = mdl.exE.copy()
         self.exponents_F_ = mdl.exF.copy()
+        self.trusted_range_ = mdl.bounds * var_scale[:, None]
 
 
 def _with_degrees(full, degrees, previous):

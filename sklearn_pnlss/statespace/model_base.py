@@ -21,7 +21,12 @@ def unbounded(k):
 
 
 class DivergenceError(ValueError):
-    """The model's simulation left any reasonable range."""
+    """The model's simulation left any reasonable range (at sample
+    ``sample`` of the simulated signal, when known)."""
+
+    def __init__(self, message, sample=None):
+        super().__init__(message)
+        self.sample = sample
 
 
 @dataclass
@@ -102,7 +107,7 @@ class StateSpaceModel:
         x0 = np.zeros(self.n_states) if x0 is None else x0
         Y, _, n_ok, x_end = self._run(np.ascontiguousarray(U), x0)
         if n_ok < U.shape[0]:
-            raise DivergenceError(f"the simulation diverges at sample {n_ok}")
+            raise DivergenceError(f"the simulation diverges at sample {n_ok}", sample=n_ok)
         return Y, x_end
 
     def simulate_states(self, U, x0=None):
@@ -110,7 +115,7 @@ class StateSpaceModel:
         x0 = np.zeros(self.n_states) if x0 is None else x0
         _, X, n_ok, _ = self._run(np.ascontiguousarray(U), x0)
         if n_ok < U.shape[0]:
-            raise DivergenceError(f"the simulation diverges at sample {n_ok}")
+            raise DivergenceError(f"the simulation diverges at sample {n_ok}", sample=n_ok)
         return X
 
     def steady_state_start(self, U_period, max_periods=200, rtol=1e-10):
@@ -130,6 +135,21 @@ class StateSpaceModel:
         given (the length is a multiple of it), else from rest."""
         x0 = None if period is None else self.steady_state_start(U[:period])
         return self.simulate(U, x0)[0]
+
+    def runs_away(self, U, period=None, factor=1.0):
+        """Whether the simulation of ``U`` (periodic steady state with
+        ``period``) diverges, or takes the nonlinearity's variables beyond
+        their trusted range by more than ``factor`` times its width: a bounded
+        model then sits on an orbit it was never fitted for."""
+        try:
+            x0 = None if period is None else self.steady_state_start(U[:period])
+            X = self.simulate_states(U, x0)
+        except DivergenceError:
+            return True
+        v = self.bounded_variables(np.hstack([X, U]))
+        lo, hi = self.bounds[:, 0], self.bounds[:, 1]
+        width = hi - lo  # infinite without bounds: only divergence counts
+        return bool(np.any((v < lo - factor * width) | (v > hi + factor * width)))
 
     def segment_error(self, seg):
         """Simulation error (T, p) on one segment, or None when it diverges."""

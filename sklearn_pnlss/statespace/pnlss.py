@@ -20,7 +20,9 @@ class PNLSSModel(StateSpaceModel):
     ``bounds`` (n + m, 2), default None (no bounds): the trusted box of
     ``[x; u]``; the monomials are evaluated at ``[x; u]`` held inside it,
     so they stay bounded (a stable ``A`` then bounds the state for every
-    bounded input). The linear terms are never held.
+    bounded input). The linear terms are never held. A trusted range from
+    data bounds the states only: the input is the user's, known and bounded,
+    and holding the states already bounds every monomial of a bounded input.
     """
 
     A: np.ndarray
@@ -40,6 +42,13 @@ class PNLSSModel(StateSpaceModel):
         self.bounds = unbounded(k) if self.bounds is None else np.array(self.bounds, dtype=float)
         if self.bounds.shape != (k, 2):
             raise ValueError(f"bounds must have shape {(k, 2)} (n_states + n_inputs, 2); got {self.bounds.shape}.")
+
+    def with_trusted_range(self, states_inputs, margin=0.0):
+        trusted = super().with_trusted_range(states_inputs, margin)
+        trusted.bounds[self.A.shape[0] :] = [-np.inf, np.inf]
+        return trusted
+
+    with_trusted_range.__doc__ = StateSpaceModel.with_trusted_range.__doc__ + " The inputs stay unbounded."
 
     def bounded_variables(self, states_inputs):
         """The monomials' variables ``[x; u]`` themselves: what ``bounds``
