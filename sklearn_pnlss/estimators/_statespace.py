@@ -13,6 +13,8 @@ from ..statespace.levenberg_marquardt import levenberg_marquardt
 from ..statespace.model_base import DivergenceError
 from ..statespace.objective import SimulationError
 from ..statespace.segments import make_segments, transient_length
+from sklearn.utils.validation import check_is_fitted
+
 from ..utils.validation import as_signal_list, validate_signals
 from ._base import SignalRegressorBase
 
@@ -254,6 +256,48 @@ class StateSpaceRegressorBase(SignalRegressorBase):
                 "frequencies than the training data).", sample=exc.sample,
             ) from None
         return Yn * self._y_scale
+
+    def range_excursion(self, X):
+        """How far each signal takes the model past the range it was fitted
+        on: before trusting a prediction on a new measurement, check it.
+
+        The model is simulated on each signal (in periodic steady state when
+        it is periodic), and the largest excursion of its nonlinearity's
+        variables (the states for :class:`PNLSSRegressor`, the branch inputs
+        for :class:`DecoupledPNLSSRegressor`) beyond their trusted range
+        (``trusted_range_``) is given as a fraction of that range's width.
+
+        Parameters
+        ----------
+        X : signals, as in :meth:`predict`
+
+        Returns
+        -------
+        excursion : ndarray of shape (n_signals,)
+            0 inside the range; 0.1 means 10 % of the range's width beyond
+            its edge, where the nonlinearity is held (``extrapolation``); inf
+            where the simulation diverges. With
+            ``extrapolation="polynomial"``, 0 unless it diverges.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from sklearn_pnlss import PNLSSRegressor
+        >>> from sklearn_pnlss.signals import multisine
+        >>> X, _ = multisine(128, fs=100.0, f_band=(1, 40), n_periods=2, n_realizations=2, random_state=0)
+        >>> y = X + 0.2 * X**2
+        >>> model = PNLSSRegressor(1, degrees=(2,), period=128, max_iter=5).fit(X, y)
+        >>> bool(model.range_excursion(X).max() <= model.range_margin)
+        True
+        >>> bool(model.range_excursion(3 * X).max() > 1)
+        True
+        """
+        check_is_fitted(self)
+        X_list, _, _ = validate_signals(self, X, reset=False, min_samples=1)
+        return np.array([
+            self._model.range_excursion(U / self._u_scale, self.period if self._signal_is_periodic(U.shape[0]) else None)
+            for U in X_list
+        ])
 
     def _export_linear_user_units(self):
         """``A_, B_, C_, D_`` in the user's units from the normalised model;

@@ -136,20 +136,29 @@ class StateSpaceModel:
         x0 = None if period is None else self.steady_state_start(U[:period])
         return self.simulate(U, x0)[0]
 
-    def runs_away(self, U, period=None, factor=1.0):
-        """Whether the simulation of ``U`` (periodic steady state with
-        ``period``) diverges, or takes the nonlinearity's variables beyond
-        their trusted range by more than ``factor`` times its width: a bounded
-        model then sits on an orbit it was never fitted for."""
+    def range_excursion(self, U, period=None):
+        """How far the simulation of ``U`` (periodic steady state with
+        ``period``) takes the nonlinearity's variables past their trusted
+        range: the largest excursion as a fraction of the range's width (0
+        inside it or without bounds, inf when the simulation diverges)."""
         try:
             x0 = None if period is None else self.steady_state_start(U[:period])
             X = self.simulate_states(U, x0)
         except DivergenceError:
-            return True
+            return np.inf
         v = self.bounded_variables(np.hstack([X, U]))
         lo, hi = self.bounds[:, 0], self.bounds[:, 1]
-        width = hi - lo  # infinite without bounds: only divergence counts
-        return bool(np.any((v < lo - factor * width) | (v > hi + factor * width)))
+        with np.errstate(invalid="ignore"):  # inf / inf without bounds
+            excess = np.maximum(lo - v, v - hi).max(axis=0) / (hi - lo)
+        excess = excess[np.isfinite(hi - lo)]
+        return float(max(excess.max(), 0.0)) if excess.size else 0.0
+
+    def runs_away(self, U, period=None, factor=1.0):
+        """Whether the simulation of ``U`` diverges, or takes the
+        nonlinearity's variables past their trusted range by more than
+        ``factor`` times its width: a bounded model then sits on an orbit it
+        was never fitted for."""
+        return self.range_excursion(U, period) > factor
 
     def segment_error(self, seg):
         """Simulation error (T, p) on one segment, or None when it diverges."""
