@@ -1,6 +1,7 @@
 """What the nonlinear state-space regressors share: the weighted
 simulation-error objectives on internally scaled signals, Levenberg-Marquardt
 with validation, and simulation for predict."""
+import warnings
 from dataclasses import dataclass, replace
 from numbers import Integral, Real
 
@@ -238,6 +239,15 @@ class StateSpaceRegressorBase(SignalRegressorBase):
         return replace(trusted, linear_extrapolation=True) if self.extrapolation == "linear" else trusted
 
     def _set_fit_result(self, fit):
+        rho = np.max(np.abs(np.linalg.eigvals(fit.model.A)))
+        if self.extrapolation != "polynomial" and rho >= 1:
+            # The hold bounds the nonlinear term; only a stable A turns that
+            # into a bounded state.
+            warnings.warn(
+                f"The fitted linear part A has spectral radius {rho:.4g} >= 1: holding the "
+                "nonlinearity at its trusted range no longer bounds the state. Pass validation "
+                "signals (X_val, y_val) or fewer iterations (max_iter).", UserWarning, stacklevel=3,
+            )
         self._model = fit.model
         self.n_iter_ = fit.n_iter
         self.best_iteration_ = fit.best_iteration
