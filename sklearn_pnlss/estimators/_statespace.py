@@ -7,6 +7,7 @@ from numbers import Integral, Real
 
 import numpy as np
 from sklearn.utils._param_validation import Interval, StrOptions
+from sklearn.utils.validation import check_is_fitted
 
 from ..frequency.noise import periodic_noise_variance
 from ..metrics import to_db
@@ -14,8 +15,6 @@ from ..statespace.levenberg_marquardt import levenberg_marquardt
 from ..statespace.model_base import DivergenceError
 from ..statespace.objective import SimulationError
 from ..statespace.segments import make_segments, transient_length
-from sklearn.utils.validation import check_is_fitted
-
 from ..utils.validation import as_signal_list, validate_signals
 from ._base import SignalRegressorBase
 
