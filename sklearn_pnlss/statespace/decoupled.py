@@ -6,7 +6,7 @@ import numpy as np
 from ._decoupled_kernels import decoupled_jacobian, decoupled_simulate
 from .model_base import DivergenceError, Segment, StateSpaceModel, unbounded
 
-__all__ = ["DecoupledModel", "DivergenceError", "Segment"]
+__all__ = ["DecoupledModel", "Segment"]
 
 _STATE_BLOCKS = ("A", "B", "Wx", "V", "G")
 

@@ -12,7 +12,8 @@ from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
-__all__ = ["DivergenceError", "Segment", "StateSpaceModel", "unbounded"]
+# DivergenceError is documented where users import it: sklearn_pnlss.DivergenceError.
+__all__ = ["Segment", "StateSpaceModel", "unbounded"]
 
 
 def unbounded(k):

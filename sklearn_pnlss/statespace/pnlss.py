@@ -6,7 +6,7 @@ import numpy as np
 from ._pnlss_kernels import pnlss_jacobian, pnlss_simulate
 from .model_base import DivergenceError, Segment, StateSpaceModel, unbounded
 
-__all__ = ["DivergenceError", "PNLSSModel", "Segment"]
+__all__ = ["PNLSSModel", "Segment"]
 
 
 @dataclass
