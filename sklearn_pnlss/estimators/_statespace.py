@@ -9,6 +9,7 @@ import numpy as np
 from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
 
+from ..decoupling.start import states_inputs_trajectory
 from ..frequency.noise import periodic_noise_variance
 from ..metrics import to_db
 from ..statespace.levenberg_marquardt import levenberg_marquardt
@@ -233,7 +234,8 @@ class StateSpaceRegressorBase(SignalRegressorBase):
         simulation of the training ``segments`` (see the class docstring)."""
         if self.extrapolation == "polynomial":
             return model.without_bounds()
-        trajectory = np.vstack([np.hstack([model.simulate_states(seg.U), seg.U]) for seg in segments])
+        # From rest, as the cost simulates each segment.
+        trajectory = states_inputs_trajectory(model, [seg.U for seg in segments])
         trusted = model.with_trusted_range(trajectory, self.range_margin)
         return replace(trusted, linear_extrapolation=True) if self.extrapolation == "linear" else trusted
 
