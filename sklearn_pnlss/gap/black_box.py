@@ -7,6 +7,8 @@ input force) and whether its nonlinearity is odd or even, smooth or sharp.
 """
 import numpy as np
 
+from ..utils.validation import is_periodic
+
 __all__ = ["fit_black_box", "branch_opinions"]
 
 # Small, fast settings: the black box is a yardstick, not the product.
@@ -20,7 +22,7 @@ def fit_black_box(u_list, y_list, period, random_state, n_jobs):
     data do not allow one (no periodic signals)."""
     from ..estimators import DecoupledPNLSSRegressor, PNLSSRegressor
 
-    if period is None or not any(u.size % period == 0 for u in u_list):
+    if not any(is_periodic(u.size, period) for u in u_list):
         return None
     X = [u[:, None] for u in u_list]
     y = [v[:, None] for v in y_list]

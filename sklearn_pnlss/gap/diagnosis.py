@@ -262,6 +262,8 @@ class GapDiagnosis(BaseEstimator):
             # Read on the training signals: the branches' own range.
             self.black_box_branches_ = branch_opinions(self.black_box_, u_list, y_list, velocity_list,
                                                        self.scales_)
+        # Kept for report's "where" analysis (distortion level, drift, gap
+        # against input level); passed on explicitly, read by no other module.
         self._train = (u_list, y_list)
         self._train_nominal = y_nominal
         self.fit_time_ = time.perf_counter() - start
@@ -308,6 +310,9 @@ class GapDiagnosis(BaseEstimator):
             y_black_box = [self._black_box_predict(u) for u in u_list]
         decision = decide(self.fits_, y_list, y_nominal, y_effects, y_black_box, self.noise_,
                           self.significance)
-        where = locate_gap(self, u_list, y_list, y_nominal, val.n_periods)
+        u_train, y_train = self._train
+        where = locate_gap(self.nominal, u_list, y_list, y_nominal, val.n_periods, fs=self.fs,
+                           period=self.period_, noise=self.noise_, significance=self.significance,
+                           u_train=u_train, y_train=y_train, y_train_nominal=self._train_nominal)
         return GapReport(decision=decision, where=where, scales=self.scales_, noise=self.noise_,
                          black_box=self.black_box_, fits=self.fits_, opinions=self.black_box_branches_)

@@ -295,15 +295,18 @@ def _element_effect(element):
     relative to its given value (or on a unit scale when it is zero)."""
     p0 = np.asarray(element.parameters(), dtype=float)
     scale = np.where(p0 != 0, np.abs(p0), 1.0)
-    name = element.name if isinstance(element, CustomForce) else type(element).__name__
+    names = tuple(element.param_names)
     if isinstance(element, CustomForce):
+        name = element.name
+
         def rebuild(p):
             return element.with_params(p)
-        names = tuple(f"p{i}" for i in range(p0.size))
     else:
+        # a built-in element's parameters are its constructor's arguments
+        name = type(element).__name__
+
         def rebuild(p):
             return type(element)(*p)
-        names = tuple(type(element)._param_names)
 
     def build(theta, nominal, s):
         p = p0 + theta * scale

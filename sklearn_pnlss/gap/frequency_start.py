@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..frequency.bla import periodic_bla
+from ..utils.validation import is_periodic
 
 __all__ = ["StiffnessChange", "measured_stiffness_change", "second_mode_start", "recalibration_start"]
 
@@ -44,7 +45,7 @@ class StiffnessChange:
 def measured_stiffness_change(u_list, y_list, y_nominal, period, fs):
     """:class:`StiffnessChange` from the periodic training signals, or None
     without at least one steady-state periodic signal."""
-    picks = [i for i, u in enumerate(u_list) if period and u.size % period == 0]
+    picks = [i for i, u in enumerate(u_list) if is_periodic(u.size, period)]
     if not picks:
         return None
 

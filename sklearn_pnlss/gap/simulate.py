@@ -11,9 +11,9 @@ from dataclasses import dataclass
 import numpy as np
 from sklearn.utils import check_random_state
 
-from ..physics._newmark import STATE_Z
-from ..physics.oscillator import band_limited_noise
+from ..physics.oscillator import STATE_Z, band_limited_noise
 from ..physics.resampling import decimate_fir, upsample_fft
+from ..utils.validation import is_periodic
 
 __all__ = ["SignalSet", "simulate_signals", "prime_factors"]
 
@@ -64,10 +64,7 @@ class SignalSet:
 
     @classmethod
     def from_signals(cls, u_list, period, fs, oversampling, decimation=None):
-        n_periods = []
-        for u in u_list:
-            n = u.size
-            n_periods.append(n // period if period and n % period == 0 and n >= period else 0)
+        n_periods = [u.size // period if is_periodic(u.size, period) else 0 for u in u_list]
         decimation = prime_factors(oversampling) if decimation is None else tuple(decimation)
         return cls(list(u_list), n_periods, period, float(fs), int(oversampling), decimation)
 

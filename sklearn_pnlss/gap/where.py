@@ -10,6 +10,7 @@ from scipy import stats
 from scipy.signal import hilbert
 
 from ..frequency.bla import excited_lines, periodic_bla
+from ..utils.validation import is_periodic
 
 __all__ = ["signal_derivative", "content_limit", "missing_force", "locate_gap"]
 
@@ -65,9 +66,9 @@ def _periods(x, P, period):
     return x[: P * period].reshape(P, period)
 
 
-def _frequency_analysis(diag, u_list, y_list, y_nominal, n_periods):
+def _frequency_analysis(u_list, y_list, y_nominal, n_periods, period, fs, noise, significance,
+                        u_train, y_train):
     """Gap spectrum of the periodic validation signals per band and line kind."""
-    period, fs, noise = diag.period_, diag.fs, diag.noise_
     picks = [i for i, P in enumerate(n_periods) if P]
     if not picks or noise is None:
         return None
@@ -86,9 +87,9 @@ def _frequency_analysis(diag, u_list, y_list, y_nominal, n_periods):
     stat = np.abs(E) ** 2 / np.maximum(noise.spectrum[None, :] / P, 1e-300)
     p_line = stats.gamma.sf(stat.sum(axis=0), a=len(picks))
     n_tested = n_bins - 1
-    significant = p_line < diag.significance / n_tested
+    significant = p_line < significance / n_tested
     significant[0] = False
-    distortion = _distortion_level(diag, n_bins)
+    distortion = _distortion_level(u_train, y_train, period, n_bins)
     f = np.fft.rfftfreq(period, 1 / fs)
     f_hi = content_limit([u_list[i] for i in picks], fs)
     edges = np.linspace(0, f_hi, N_BANDS + 1)
@@ -113,13 +114,11 @@ def _frequency_analysis(diag, u_list, y_list, y_nominal, n_periods):
                 detection_lines=bool(has_detection))
 
 
-def _distortion_level(diag, n_bins):
+def _distortion_level(u_list, y_list, period, n_bins):
     """Output power of the stochastic nonlinear distortions per bin, from the
     training realisations around their BLA (None without two realisations
     of two periods)."""
-    u_list, y_list = diag._train
-    period = diag.period_
-    sel = [i for i, u in enumerate(u_list) if u.size % period == 0 and u.size >= 2 * period]
+    sel = [i for i, u in enumerate(u_list) if is_periodic(u.size, period) and u.size >= 2 * period]
     if len(sel) < 2:
         return None
     Up = [u_list[i].reshape(-1, period, 1) for i in sel]
@@ -138,10 +137,11 @@ def _db(x):
     return float(10 * np.log10(max(float(x), 1e-300)))
 
 
-def _amplitude_analysis(diag, u_list, y_list, y_nominal, velocity):
-    """Gap rms against displacement and velocity level (quantile bins)."""
+def _amplitude_analysis(u_list, y_list, y_nominal, velocity, noise, train):
+    """Gap rms against displacement and velocity level (quantile bins);
+    ``train`` is ``(u, y, y_nominal)`` of the training signals."""
     e = np.concatenate([a - b for a, b in zip(y_list, y_nominal)])
-    noise_db = _db(diag.noise_.variance) if diag.noise_ is not None else None
+    noise_db = _db(noise.variance) if noise is not None else None
     out = {}
     for name, x in (("displacement", np.concatenate(y_list)), ("velocity", np.concatenate(velocity))):
         edges = np.quantile(np.abs(x), np.linspace(0, 1, N_LEVELS + 1))
@@ -155,8 +155,7 @@ def _amplitude_analysis(diag, u_list, y_list, y_nominal, velocity):
     # Input levels: the relative gap per distinct input rms, training and
     # validation together (a gap growing with level is nonlinear).
     levels = []
-    for tag, (us, ys, ns) in (("train", diag._train + (diag._train_nominal,)),
-                              ("validation", (u_list, y_list, y_nominal))):
+    for tag, (us, ys, ns) in (("train", train), ("validation", (u_list, y_list, y_nominal))):
         for u, y, yn in zip(us, ys, ns):
             levels.append(dict(set=tag, input_rms=float(np.sqrt(np.mean(u**2))),
                                relative_gap_db=_db(np.mean((y - yn) ** 2) / np.mean(y**2))))
@@ -195,10 +194,10 @@ def missing_force(nominal, u_list, y_list, n_periods, period, fs, f_max):
     return tuple(map(np.concatenate, (ys, vs, fm)))
 
 
-def _force_map(diag, u_list, y_list, n_periods, f_max):
+def _force_map(nominal, u_list, y_list, n_periods, period, fs, f_max):
     """Mean missing force (see :func:`missing_force`) over the
     (displacement, velocity) plane; stateful nominal elements are flagged."""
-    y, v, f = missing_force(diag.nominal, u_list, y_list, n_periods, diag.period_, diag.fs, f_max)
+    y, v, f = missing_force(nominal, u_list, y_list, n_periods, period, fs, f_max)
     y_edges = np.linspace(y.min(), y.max(), MAP_BINS + 1)
     v_edges = np.linspace(v.min(), v.max(), MAP_BINS + 1)
     iy = np.clip(np.searchsorted(y_edges, y, side="right") - 1, 0, MAP_BINS - 1)
@@ -210,14 +209,13 @@ def _force_map(diag, u_list, y_list, n_periods, f_max):
     force = np.where(count >= MIN_PER_CELL, total / np.maximum(count, 1), np.nan)
     return dict(displacement_edges=y_edges, velocity_edges=v_edges, force=force, count=count,
                 missing_force_rms=float(np.sqrt(np.mean(f**2))),
-                stateful_nominal_left_out=bool(any(e.n_states for e in diag.nominal.forces)),
+                stateful_nominal_left_out=bool(any(e.n_states for e in nominal.forces)),
                 samples=dict(displacement=y, velocity=v, force=f))
 
 
-def _time_analysis(diag, u_list, y_list, y_nominal, n_periods):
+def _time_analysis(u_list, y_list, y_nominal, n_periods, period, fs, noise, y_train):
     """Gap over time: along sweeps (against the instantaneous frequency of
     the input) and from period to period of the training signals (drift)."""
-    fs, period = diag.fs, diag.period_
     sweeps = []
     for i, (u, y, yn, P) in enumerate(zip(u_list, y_list, y_nominal, n_periods)):
         if P or u.size < 4 * N_WINDOWS:
@@ -234,24 +232,57 @@ def _time_analysis(diag, u_list, y_list, y_nominal, n_periods):
     # Drift: how much the measured response changes from the first period,
     # against what noise alone gives (2 sigma^2 per sample).
     drift = None
-    u_tr, y_tr = diag._train
     changes = []
-    for y in y_tr:
-        if period and y.size % period == 0 and y.size >= 3 * period:
+    for y in y_train:
+        if is_periodic(y.size, period) and y.size >= 3 * period:
             Yp = _periods(y, y.size // period, period)
             changes.append([np.mean((Yp[p] - Yp[0]) ** 2) for p in range(1, Yp.shape[0])])
-    if changes and diag.noise_ is not None:
+    if changes and noise is not None:
         width = min(len(c) for c in changes)
         mean_change = np.mean([c[:width] for c in changes], axis=0)
-        ratio = mean_change / (2 * diag.noise_.variance)
+        ratio = mean_change / (2 * noise.variance)
         slope = np.polyfit(np.arange(1, width + 1), ratio, 1)[0] if width > 1 else 0.0
         drift = dict(change_vs_noise_db=[_db(r) for r in ratio], slope_per_period=float(slope),
                      drifting=bool(ratio[-1] > 2.0))
     return dict(sweeps=sweeps, drift=drift)
 
 
-def locate_gap(diag, u_list, y_list, y_nominal, n_periods):
-    """The "where" analysis of a :class:`GapDiagnosis` on validation signals.
+def locate_gap(nominal, u_list, y_list, y_nominal, n_periods, *, fs, period, noise, significance,
+               u_train, y_train, y_train_nominal):
+    """Where a nominal simulator misses validation signals.
+
+    The "where" analysis of :class:`~sklearn_pnlss.gap.GapDiagnosis`, which
+    calls it with its fitted noise floor and training signals.
+
+    Parameters
+    ----------
+    nominal : Oscillator
+        The nominal simulator (its equation of motion gives the missing
+        force).
+    u_list, y_list : list of ndarray (n_samples_i,)
+        Validation input forces and measured displacements.
+    y_nominal : list of ndarray (n_samples_i,)
+        The nominal simulation of each validation signal.
+    n_periods : list of int
+        Steady-state periods of each validation signal (0: from rest), as
+        in :class:`~sklearn_pnlss.gap.simulate.SignalSet`.
+    fs : float
+        Sampling rate, Hz.
+    period : int or None
+        Samples per period of the periodic signals.
+    noise : NoiseFloor or None
+        Noise floor of the training periods (see
+        :func:`~sklearn_pnlss.gap.noise.estimate_noise`); without it there
+        is no frequency analysis and no drift reading.
+    significance : float
+        Level of the per-line test of the gap against the noise floor
+        (Bonferroni over the lines).
+    u_train, y_train : list of ndarray (n_samples_i,)
+        Training input forces and measured displacements: their
+        realisations give the nonlinear distortion level, their periods the
+        drift, their input levels a point each of the gap against level.
+    y_train_nominal : list of ndarray (n_samples_i,)
+        The nominal simulation of each training signal.
 
     Returns
     -------
@@ -261,11 +292,13 @@ def locate_gap(diag, u_list, y_list, y_nominal, n_periods):
         (gap per displacement / velocity level, per input level),
         ``state_plane`` (missing-force map) and ``time`` (sweeps, drift).
     """
-    f_max = content_limit(u_list, diag.fs)
-    velocity = [signal_derivative(y, diag.fs, P, diag.period_, 1, f_max) for y, P in zip(y_list, n_periods)]
+    f_max = content_limit(u_list, fs)
+    velocity = [signal_derivative(y, fs, P, period, 1, f_max) for y, P in zip(y_list, n_periods)]
     return dict(
-        frequency=_frequency_analysis(diag, u_list, y_list, y_nominal, n_periods),
-        amplitude=_amplitude_analysis(diag, u_list, y_list, y_nominal, velocity),
-        state_plane=_force_map(diag, u_list, y_list, n_periods, f_max),
-        time=_time_analysis(diag, u_list, y_list, y_nominal, n_periods),
+        frequency=_frequency_analysis(u_list, y_list, y_nominal, n_periods, period, fs, noise, significance,
+                                      u_train, y_train),
+        amplitude=_amplitude_analysis(u_list, y_list, y_nominal, velocity, noise,
+                                      (u_train, y_train, y_train_nominal)),
+        state_plane=_force_map(nominal, u_list, y_list, n_periods, period, fs, f_max),
+        time=_time_analysis(u_list, y_list, y_nominal, n_periods, period, fs, noise, y_train),
     )

@@ -62,12 +62,22 @@ class ForceElement:
     """Base class of the force elements.
 
     Subclasses define ``kind`` (an integer code known to the compiled kernel),
-    ``n_states`` (number of internal states) and :meth:`parameters` (the flat
-    float parameter vector in the order the kernel reads it).
+    ``n_states`` (number of internal states), :meth:`parameters` (the flat
+    float parameter vector in the order the kernel reads it) and
+    ``param_names``.
+
+    Attributes
+    ----------
+    param_names : tuple of str
+        Names of the entries of :meth:`parameters`, in order.  For the
+        built-in elements they are also the constructor's arguments, so
+        ``type(element)(*element.parameters())`` rebuilds the element;
+        a :class:`CustomForce` names its vector ``p0, p1, ...``.
     """
 
     kind = 0
     n_states = 0
+    param_names = ()
     #: True when the force depends on time itself (no periodic steady state).
     time_varying = False
 
@@ -75,8 +85,7 @@ class ForceElement:
         raise NotImplementedError
 
     def __repr__(self):
-        names = self._param_names
-        args = ", ".join(f"{n}={getattr(self, n)!r}" for n in names)
+        args = ", ".join(f"{n}={getattr(self, n)!r}" for n in self.param_names)
         return f"{type(self).__name__}({args})"
 
     def __eq__(self, other):
@@ -120,7 +129,7 @@ class BoucWen(ForceElement):
 
     kind = KIND_BOUC_WEN
     n_states = 1
-    _param_names = ("alpha", "beta", "gamma", "delta", "nu")
+    param_names = ("alpha", "beta", "gamma", "delta", "nu")
 
     def __init__(self, alpha=5e4, beta=1e3, gamma=0.8, delta=-1.1, nu=1.0):
         self.alpha = _check_finite_real("alpha", alpha)
@@ -152,7 +161,7 @@ class CubicStiffness(ForceElement):
 
     kind = KIND_CUBIC_STIFFNESS
     n_states = 0
-    _param_names = ("k3",)
+    param_names = ("k3",)
 
     def __init__(self, k3):
         self.k3 = _check_finite_real("k3", k3)
@@ -180,7 +189,7 @@ class QuadraticStiffness(ForceElement):
     """
 
     kind = KIND_QUADRATIC_STIFFNESS
-    _param_names = ("k2",)
+    param_names = ("k2",)
 
     def __init__(self, k2):
         self.k2 = _check_finite_real("k2", k2)
@@ -212,7 +221,7 @@ class CoulombFriction(ForceElement):
     """
 
     kind = KIND_COULOMB_FRICTION
-    _param_names = ("fc", "v_smooth")
+    param_names = ("fc", "v_smooth")
 
     def __init__(self, fc, v_smooth=1e-3):
         self.fc = _check_finite_real("fc", fc)
@@ -238,7 +247,7 @@ class QuadraticDamping(ForceElement):
     """
 
     kind = KIND_QUADRATIC_DAMPING
-    _param_names = ("c2",)
+    param_names = ("c2",)
 
     def __init__(self, c2):
         self.c2 = _check_finite_real("c2", c2)
@@ -275,7 +284,7 @@ class DeadZoneSpring(ForceElement):
     """
 
     kind = KIND_DEAD_ZONE_SPRING
-    _param_names = ("kb", "gap", "smoothing")
+    param_names = ("kb", "gap", "smoothing")
 
     def __init__(self, kb, gap, smoothing=None):
         self.kb = _check_finite_real("kb", kb)
@@ -316,7 +325,7 @@ class CoupledMass(ForceElement):
 
     kind = KIND_COUPLED_MASS
     n_states = 2
-    _param_names = ("m2", "c2", "k2")
+    param_names = ("m2", "c2", "k2")
 
     def __init__(self, m2, c2, k2):
         self.m2 = _check_positive("m2", m2)
@@ -353,7 +362,7 @@ class StiffnessDrift(ForceElement):
     kind = KIND_STIFFNESS_DRIFT
     n_states = 1
     time_varying = True
-    _param_names = ("rate",)
+    param_names = ("rate",)
 
     def __init__(self, rate):
         self.rate = _check_finite_real("rate", rate)
@@ -393,7 +402,6 @@ class CustomForce(ForceElement):
     """
 
     kind = KIND_CUSTOM
-    _param_names = ("function", "params", "name")
 
     def __init__(self, function, params=(), name="custom"):
         if not hasattr(function, "py_func"):
@@ -418,6 +426,11 @@ class CustomForce(ForceElement):
 
     def __hash__(self):
         return hash((id(self.function), tuple(self.params)))
+
+    @property
+    def param_names(self):
+        """Names of the parameter vector's entries: ``("p0", "p1", ...)``."""
+        return tuple(f"p{i}" for i in range(self.params.size))
 
     def with_params(self, params):
         """A copy with another parameter vector (same function and name)."""

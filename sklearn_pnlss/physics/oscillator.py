@@ -11,9 +11,12 @@ from sklearn.utils import check_random_state
 from ._newmark import STATE_Z, integrator_kernels
 from ._shooting import PeriodShooter
 from .forces import pack_forces
-from .resampling import _check_signal, check_factors, decimate_fir, upsample_fft
+from .resampling import check_factors, check_signal, decimate_fir, upsample_fft
 
-__all__ = ["Oscillator", "FineSimulation", "band_limited_noise"]
+# STATE_Z is public: the index of the first internal state in an integrator
+# state vector (FineSimulation.final_state, simulate_fine's initial_state),
+# for callers that build such a state themselves.
+__all__ = ["Oscillator", "FineSimulation", "band_limited_noise", "STATE_Z"]
 
 # Newton stops when every update is below this fraction of the unknown's
 # running magnitude: round-off level, because the benchmark files were
@@ -47,6 +50,8 @@ class FineSimulation:
         The integrator's state after the last step: for a periodic
         simulation, the steady state at the first sample of the next period,
         to continue from with ``simulate_fine(..., initial_state=...)``.
+        Laid out as ``[y, yd, ydd, z_0, ..., z_{nz-1}, zd_0, ..., zd_{nz-1}]``;
+        the internal states start at index ``STATE_Z`` of this module.
     """
 
     t: np.ndarray
@@ -261,7 +266,7 @@ class Oscillator:
         -------
         sim : FineSimulation
         """
-        u_fine = _check_signal(u_fine, "u_fine")
+        u_fine = check_signal(u_fine, "u_fine")
         fs = _positive_real("fs", fs)
         if u_fine.size < 2:
             raise ValueError(f"u_fine must have at least 2 samples, got {u_fine.size}.")
@@ -384,7 +389,7 @@ class Oscillator:
         y : ndarray of shape (n_samples,)
             Displacement at rate ``fs``.
         """
-        u = _check_signal(u, "u")
+        u = check_signal(u, "u")
         fs = _positive_real("fs", fs)
         if isinstance(oversampling, bool) or not isinstance(oversampling, Integral) or oversampling < 1:
             raise ValueError(f"oversampling must be a positive int, got {oversampling!r}.")
@@ -407,7 +412,7 @@ class Oscillator:
         if u_fine is None:
             u_fine = upsample_fft(u, oversampling, periodic=periodic)
         else:
-            u_fine = _check_signal(u_fine, "u_fine")
+            u_fine = check_signal(u_fine, "u_fine")
             if u_fine.size != n * oversampling:
                 raise ValueError(
                     f"u_fine must have len(u) * oversampling = {n * oversampling} "

@@ -39,13 +39,19 @@ def check_factors(factors, name="factors"):
     return tuple(_check_factor(f"each factor of {name}", r) for r in factors)
 
 
-def _check_signal(x, name="x"):
+def check_signal(x, name="x"):
+    """A 1-D finite float64 record, or a ValueError naming ``name``."""
     x = np.asarray(x, dtype=np.float64)
     if x.ndim != 1:
         raise ValueError(f"{name} must be 1-D, got an array of shape {x.shape}.")
     if not np.all(np.isfinite(x)):
         raise ValueError(f"{name} contains NaN or infinite values.")
     return x
+
+
+# Old private name, still imported by sklearn_pnlss/datasets/_bouc_wen.py
+# until that module switches to check_signal.
+_check_signal = check_signal
 
 
 def fir_decimation_filter(r):
@@ -134,7 +140,7 @@ def decimate_fir(x, factors, *, periodic=False):
     >>> y.shape
     (200,)
     """
-    x = _check_signal(x)
+    x = check_signal(x)
     for r in check_factors(factors):
         if r == 1:
             continue
@@ -175,7 +181,7 @@ def upsample_fft(x, factor, *, periodic):
     >>> bool(np.allclose(xf, np.cos(2 * np.pi * 3 * np.arange(64) / 64)))
     True
     """
-    x = _check_signal(x)
+    x = check_signal(x)
     factor = _check_factor("factor", factor)
     n = x.size
     if n < 2:
