@@ -2,8 +2,8 @@
 linear part, fit figures) and the export of its linear part to SciPy.
 
 The estimators' ``summary()`` and ``to_statespace()`` methods call
-:func:`summarize` and :func:`linear_statespace`; each estimator adds its own
-lines through two hooks, ``_summary_structure()`` and ``_summary_fit()``.
+:func:`summarize` and :func:`linear_statespace`; each estimator hands in its
+own lines (``structure``, ``fit``).
 """
 from dataclasses import dataclass, field
 
@@ -186,7 +186,7 @@ def lm_fit_figures(estimator):
     return out
 
 
-def summarize(estimator, X=None, y=None, fs=None):
+def summarize(estimator, X=None, y=None, fs=None, *, structure=None, fit=None):
     """The :class:`ModelSummary` of a fitted estimator.
 
     The estimators' ``summary`` method; see
@@ -200,6 +200,9 @@ def summarize(estimator, X=None, y=None, fs=None):
     fs : float or None, default=None
         Sampling frequency in Hz; None: the one the model knows, else
         frequencies are in cycles per sample.
+    structure, fit : dict or None, default=None
+        The model-specific lines and the figures of its fit (see
+        :class:`ModelSummary`).
 
     Returns
     -------
@@ -221,5 +224,5 @@ def summarize(estimator, X=None, y=None, fs=None):
         n_params=int(estimator.n_params_), n_linear_params=n_linear,
         n_nonlinear_params=int(getattr(estimator, "n_nonlinear_params_", 0)), fs=fs,
         poles=poles, natural_frequencies=freq, damping_ratios=damp,
-        structure=estimator._summary_structure(), fit=estimator._summary_fit(), scores=scores,
+        structure=dict(structure or {}), fit=dict(fit or {}), scores=scores,
     )

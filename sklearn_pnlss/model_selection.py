@@ -11,7 +11,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from .decoupling.cpd import rank_scan
 from .decoupling.jacobian_tensor import sample_points
-from .decoupling.start import nonlinear_jacobian_tensor, states_inputs_trajectory
+from .decoupling.start import nonlinear_jacobian_tensor
 from .metrics import rms_error
 from .utils.validation import as_signal_list, validate_signals
 
@@ -121,10 +121,10 @@ def cpd_rank_scan(pnlss, X, ranks=range(1, 9), *, n_points=500, n_init=3, random
     RankScan
         ``ranks`` and the relative CPD ``errors``.
     """
-    check_is_fitted(pnlss, "_model")
+    check_is_fitted(pnlss, "model_")
     X_list, _, _ = validate_signals(pnlss, X, reset=False)
-    Un = [U / pnlss._u_scale for U in X_list]
-    trajectory = states_inputs_trajectory(pnlss._model, Un, pnlss.period)
+    model = pnlss.model_
+    trajectory = model.normalised.trajectory([model.normalise_inputs(U) for U in X_list], pnlss.period)
     points = sample_points(trajectory, n_points=n_points, random_state=random_state)
-    J = nonlinear_jacobian_tensor(pnlss._model, points)
+    J = nonlinear_jacobian_tensor(model.normalised, points)
     return rank_scan(J, list(ranks), n_init=n_init, random_state=random_state)

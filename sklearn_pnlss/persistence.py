@@ -20,8 +20,9 @@ from . import __version__
 __all__ = ["FORMAT_VERSION", "IncompatibleModelFileError", "load", "read_header", "save"]
 
 #: Version of the file layout and of the pickled estimators' attributes;
-#: raised whenever a file written before cannot be read correctly any more.
-FORMAT_VERSION = 1
+#: raised whenever a file written before cannot be read correctly any more
+#: (2: the fitted model is the public ``model_``, a ScaledModel).
+FORMAT_VERSION = 2
 
 _MAGIC = "sklearn_pnlss model file"
 
@@ -149,7 +150,7 @@ def load(path):
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     path = save(BLAEstimator(n_states=2), pathlib.Path(folder) / "bla.joblib")
     ...     read_header(path)["format_version"], load(path).n_states
-    (1, 2)
+    (2, 2)
     """
     with open(path, "rb") as fh:
         header = _read_header(fh, path)

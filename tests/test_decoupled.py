@@ -157,14 +157,13 @@ def test_grid_search_over_branches_and_degree_on_held_out_signals(tmp_path):
 
 
 def test_z_range_is_that_of_the_fitted_model():
-    from sklearn_pnlss.decoupling.start import states_inputs_trajectory
-
     X, y = _data()
     model = _small().fit(X, y)
-    traj = states_inputs_trajectory(model._model, [U / model._u_scale for U in X], N)
-    z = traj @ model._model.V
+    fitted = model.model_
+    traj = fitted.normalised.trajectory([fitted.normalise_inputs(U) for U in X], N)
+    z = traj @ fitted.normalised.V
     np.testing.assert_allclose(model.z_range_, np.column_stack([z.min(0), z.max(0)]))
     # In user units too: V_ maps the user's [x; u] (x in the exported basis).
-    x_user = traj[:, :2] * model._x_scale
-    u_user = np.vstack([U for U in X])
-    np.testing.assert_allclose(np.hstack([x_user, u_user]) @ model.V_, z, rtol=1e-9, atol=1e-9)
+    user = np.vstack([fitted.states_inputs(U, N) for U in X])
+    np.testing.assert_allclose(user[:, 2:], np.vstack(X), rtol=1e-12)
+    np.testing.assert_allclose(user @ model.V_, z, rtol=1e-9, atol=1e-9)

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from sklearn_pnlss import BLAEstimator, PNLSSRegressor
-from sklearn_pnlss.estimators.pnlss import _with_degrees
+from sklearn_pnlss.statespace.degree_growth import with_degrees
 from sklearn_pnlss.signals import multisine
 from sklearn_pnlss.statespace.levenberg_marquardt import lm_step_basis
 from sklearn_pnlss.statespace.monomials import monomial_exponents
@@ -218,9 +218,9 @@ def test_grown_degrees_start_each_stage_where_the_previous_ended():
     rng = np.random.default_rng(4)
     full = _truth(rng)
     full.E[...] = 0.0
-    low = _with_degrees(full, (2,), None)
+    low = with_degrees(full, (2,), None)
     low.E[...] = 0.05 * rng.standard_normal(low.E.shape)
-    grown = _with_degrees(full, (2, 3), low)
+    grown = with_degrees(full, (2, 3), low)
     assert grown.E.shape == full.E.shape
     U = 0.5 * rng.standard_normal((300, 1))
     # The added degree-3 terms start at zero: the same model, the same output.

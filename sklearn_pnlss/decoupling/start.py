@@ -17,7 +17,7 @@ from .branches import fit_branches
 from .cpd import decompose_jacobian
 from .jacobian_tensor import polynomial_jacobian, sample_points
 
-__all__ = ["decoupled_start", "nonlinear_jacobian_tensor", "states_inputs_trajectory"]
+__all__ = ["decoupled_start", "nonlinear_jacobian_tensor"]
 
 
 def _split_linear(M, exponents, n):
@@ -54,18 +54,6 @@ def nonlinear_jacobian_tensor(pnlss_model, points):
     *_, E, exE = _split_linear(np.asarray(pnlss_model.E, dtype=np.float64), pnlss_model.exE, n)
     *_, F, exF = _split_linear(np.asarray(pnlss_model.F, dtype=np.float64), pnlss_model.exF, n)
     return _jacobian_tensor(E, exE, F, exF, np.asarray(points, dtype=np.float64))
-
-
-def states_inputs_trajectory(model, U_list, period=None):
-    """``[x; u]`` along the simulation of each input (periodic steady state
-    for signals of whole periods, else from rest), stacked: the region
-    where a decoupled model must reproduce the full one."""
-    parts = []
-    for U in U_list:
-        periodic = period is not None and U.shape[0] % period == 0
-        x0 = model.steady_state_start(U[:period]) if periodic else None
-        parts.append(np.hstack([model.simulate_states(U, x0), U]))
-    return np.vstack(parts)
 
 
 def decoupled_start(pnlss_model, states_inputs, n_branches, degree, *, n_points=500, random_state=None):

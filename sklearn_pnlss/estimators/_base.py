@@ -139,7 +139,7 @@ class SignalRegressorBase(RegressorMixin, BaseEstimator):
         (4, 0.6)
         """
         check_is_fitted(self)
-        return summarize(self, X, y, fs=fs)
+        return summarize(self, X, y, fs=fs, structure=self._summary_structure(), fit=self._summary_fit())
 
     def to_statespace(self, fs=None):
         """The linear part ``A_, B_, C_, D_`` as a discrete-time

@@ -5,15 +5,16 @@ from numbers import Integral
 
 import numpy as np
 from joblib import Parallel, delayed
-from sklearn.base import _fit_context, clone
+from sklearn.base import clone
 from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
 
-from ..decoupling.start import decoupled_start, states_inputs_trajectory
+from ..decoupling.start import decoupled_start
 from ..inspection import lm_fit_figures
+from ..statespace.fitting import optimise
 from ..statespace.model_base import DivergenceError
-from ..utils.handover import attach_stage, detach_stage
+from ..utils.handover import attach_stage
 from ..utils.validation import check_period, restore_layout, validate_signals
 from ._statespace import FIT_PARAMETER_CONSTRAINTS, StateSpaceRegressorBase
 from .bla import BLAEstimator
@@ -188,38 +189,21 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         self.verbose = verbose
         self.random_state = random_state
 
-    @_fit_context(prefer_skip_nested_validation=False)
-    def fit(self, X, y, *, X_val=None, y_val=None, time_weight=None):
-        """Fit (or take) the full start model, then the decoupled model.
+    def _fit_start(self, stage, X_list, y_list, val, weights):
+        """The fitted full PNLSS model (``start_model_``), handed over or
+        fitted here; the decoupled starts are drawn from it in
+        ``_fit_from_start``."""
+        self.start_model_ = self._start_model(stage, X_list, y_list, val, weights)
+        return self.start_model_.model_
 
-        Parameters
-        ----------
-        X, y : signals (see :class:`PNLSSRegressor`)
-        X_val, y_val : signals or None, default=None
-            Validation signals: pick the best iterate of each start and the
-            best start (the paper's practice). Also passed to the start
-            model's fit when it is fitted here.
-        time_weight : signals or None, default=None
-            As in :meth:`PNLSSRegressor.fit`.
-
-        Returns
-        -------
-        self
-        """
-        X, stage = detach_stage(X)
-        X_list, y_list = self._validate_fit_data(X, y)
-        period = check_period(self.period)
-        weights = self._check_time_weight(time_weight, y_list)
-        val = self._check_validation(X_val, y_val)
-        start = self._start_model(stage, X_list, y_list, X_val, y_val, time_weight)
-        self.start_model_ = start
-        self._u_scale, self._y_scale, self._x_scale = start._u_scale, start._y_scale, start._x_scale
-        full = start._model
-        trajectory = self._trajectory(full, X_list, period, "start model")
-        objectives = self._objectives(X_list, y_list, period, weights, full.A)
+    def _fit_from_start(self, full, objectives, settings, val, X_list):
+        """``n_init`` decoupled starts, each a CPD of the full model's
+        Jacobian tensor along its simulation of ``X_list``, fitted in
+        parallel; the best is kept."""
+        trajectory = self._trajectory(full, X_list, "start model")
         seeds = check_random_state(self.random_state).randint(np.iinfo(np.int32).max, size=self.n_init)
         runs = Parallel(n_jobs=self.n_jobs, prefer="threads")(
-            delayed(self._one_start)(full, trajectory, int(seed), objectives, val) for seed in seeds
+            delayed(self._one_start)(full, trajectory, int(seed), objectives, settings, val) for seed in seeds
         )
         fits, cpd_errors = zip(*runs)
         scores = np.array([
@@ -228,22 +212,16 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         self.best_init_ = int(np.argmin(scores))
         self.init_scores_ = scores
         self.cpd_errors_ = np.array(cpd_errors)
-        self._set_fit_result(fits[self.best_init_])
-        # The branch inputs' range along the fitted model's own simulation
-        # (after LM its state basis is no longer the start's).
-        self._export_user_units(self._trajectory(self._model, X_list, period, "fitted decoupled model"))
-        self.n_params_ = self._model.n_params
-        self.n_nonlinear_params_ = self._model.n_nonlinear_params
-        return self
+        return fits[self.best_init_]
 
-    def _trajectory(self, model, X_list, period, what):
-        """``[x; u]`` along the model's simulation of the training inputs (in
-        periodic steady state, or from rest when the steady-state iteration
-        diverges)."""
-        U_list = [U / self._u_scale for U in X_list]
-        for per in dict.fromkeys((period, None)):
+    def _trajectory(self, model, X_list, what):
+        """Normalised ``[x; u]`` along the simulation of the training inputs
+        by ``model`` (a ScaledModel), in periodic steady state, or from rest
+        when the steady-state iteration diverges."""
+        U_list = [model.normalise_inputs(U) for U in X_list]
+        for per in dict.fromkeys((check_period(self.period), None)):
             try:
-                return states_inputs_trajectory(model, U_list, per)
+                return model.normalised.trajectory(U_list, per)
             except DivergenceError:
                 continue
         raise ValueError(
@@ -251,7 +229,7 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
             "max_iter, pass validation signals (X_val, y_val), or check the data."
         )
 
-    def _start_model(self, stage, X_list, y_list, X_val, y_val, time_weight):
+    def _start_model(self, stage, X_list, y_list, val, weights):
         """The fitted full PNLSS model the decoupled one starts from."""
         if isinstance(stage, PNLSSRegressor):
             start = stage
@@ -269,49 +247,41 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
                     equations="both" if self.output_branches else "state", period=self.period,
                 )
             X_fit = X_list if stage is None else attach_stage(X_list, stage)
-            start.fit(X_fit, y_list, X_val=X_val, y_val=y_val, time_weight=time_weight)
+            X_val, y_val = val if val is not None else (None, None)
+            start.fit(X_fit, y_list, X_val=X_val, y_val=y_val, time_weight=weights)
         if start.n_states != self.n_states:
             raise ValueError(
                 f"The start model has n_states={start.n_states} but n_states={self.n_states}; make them equal."
             )
         return start
 
-    def _one_start(self, full, trajectory, seed, objectives, val):
+    def _one_start(self, full, trajectory, seed, objectives, settings, val):
         model, cpd_error = decoupled_start(
-            full, trajectory, self.n_branches, self.degree, n_points=self.n_points, random_state=seed,
+            full.normalised, trajectory, self.n_branches, self.degree, n_points=self.n_points, random_state=seed,
         )
         model = model.with_theta(model.theta)  # a private copy
         model.output_branches = bool(self.output_branches)
         if not self.output_branches:
             model.Wy[:] = 0.0
         try:
-            return self._optimise(model, objectives, val), cpd_error
+            return optimise(full.with_normalised(model), objectives, settings, val), cpd_error
         except DivergenceError:
             # The paper's step 7: an unstable start is replaced by W = 0
             # (the linear model), from which LM grows the branches.
             model.Wx[:] = 0.0
             model.Wy[:] = 0.0
-            return self._optimise(model, objectives, val), cpd_error
+            return optimise(full.with_normalised(model), objectives, settings, val), cpd_error
 
-    def _n_null_directions(self, model):
-        """n^2 for the state basis, and per branch: the scale shared by W
-        and g, the scale shared by V and g, and the linear term of g that A
-        and B absorb."""
-        return model.n_states**2 + 3 * model.n_branches
-
-    def _export_user_units(self, trajectory):
-        mdl = self._model
-        T, Sy = self._export_linear_user_units()
-        # z = V_n^T s_n = V_n^T S^-1 s, so the branches keep their
-        # coefficients and V absorbs the scaling.
-        S_i = 1 / np.concatenate([self._x_scale, self._u_scale])
-        self.V_ = S_i[:, None] * mdl.V
-        self.W_x_ = T @ mdl.Wx
-        self.W_y_ = Sy @ mdl.Wy
-        self.coef_ = mdl.G.copy()
-        z = trajectory @ mdl.V
+    def _export(self, X_list):
+        user = super()._export(X_list)
+        self.V_, self.W_x_, self.W_y_ = user.V, user.Wx, user.Wy
+        self.coef_ = user.G
+        # The branch inputs' range along the fitted model's own simulation
+        # (after LM its state basis is no longer the start's).
+        z = self._trajectory(self.model_, X_list, "fitted decoupled model") @ self.model_.normalised.V
         self.z_range_ = np.column_stack([z.min(axis=0), z.max(axis=0)])
-        self.trusted_range_ = mdl.bounds.copy()
+        self.trusted_range_ = user.bounds
+        return user
 
     def _summary_structure(self):
         return {
@@ -349,13 +319,14 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         out = []
         for U in X_list:
             period = self.period if self._signal_is_periodic(U.shape[0]) else None
+            model = self.model_.normalised
             try:
-                s = states_inputs_trajectory(self._model, [U / self._u_scale], period)
+                s = model.states_inputs(self.model_.normalise_inputs(U), period)
             except DivergenceError as exc:
                 raise ValueError(f"{type(self).__name__}.branch_inputs: {exc}; X drives the model far "
                                  "outside the range it was fitted on.") from None
             # Both in normalised units: V_ absorbed the scaling, z is the same.
-            out.append(s @ self._model.V)
+            out.append(s @ model.V)
         return restore_layout(out, layout)
 
     def branch_values(self, z=None, n_points=200):

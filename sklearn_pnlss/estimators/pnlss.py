@@ -4,15 +4,17 @@ from numbers import Integral
 
 import numpy as np
 from joblib import effective_n_jobs
-from sklearn.base import _fit_context, clone
+from sklearn.base import clone
 from sklearn.utils._param_validation import Interval, StrOptions
 
 from ..statespace.linear import is_stable, simulate_linear_signal
 from ..statespace.monomials import monomial_exponents
-from ..statespace.pnlss import DivergenceError, PNLSSModel
-from ..utils.handover import detach_stage
+from ..statespace.degree_growth import degree_stages, optimise_growing_degrees
+from ..statespace.model_base import DivergenceError
+from ..statespace.pnlss import PNLSSModel
+from ..statespace.scaled import ScaledModel, unit_rms_scales
 from ..utils.validation import check_period
-from ._statespace import FIT_PARAMETER_CONSTRAINTS, LMFit, StateSpaceRegressorBase
+from ._statespace import FIT_PARAMETER_CONSTRAINTS, StateSpaceRegressorBase
 from .bla import BLAEstimator
 
 __all__ = ["PNLSSRegressor"]
@@ -236,15 +238,6 @@ class PNLSSRegressor(StateSpaceRegressorBase):
             raise ValueError(f"degrees must all be >= 2 (the linear terms are in A, B, C, D); got {self.degrees}.")
         return degrees
 
-    def _degree_stages(self):
-        degrees = self._degrees()
-        if self.grow_degrees is False:
-            return [tuple(degrees)]
-        # "auto" fits degrees up to 3 together: degree 2 alone, an even
-        # nonlinearity, leads the fit of (2, 3) to a worse optimum.
-        n_first = max(sum(d <= 3 for d in degrees), 1) if self.grow_degrees == "auto" else 1
-        return [tuple(degrees[:k]) for k in range(n_first, len(degrees) + 1)]
-
     def _exponents(self, n, m):
         degrees = self._degrees()
         active = np.ones(n + m, dtype=bool)
@@ -256,48 +249,23 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         exF = ex if self.equations in ("output", "both") else none
         return exE, exF
 
-    @_fit_context(prefer_skip_nested_validation=False)
-    def fit(self, X, y, *, X_val=None, y_val=None, time_weight=None):
-        """Fit the linear start, then the full model by Levenberg-Marquardt.
+    def _fit_start(self, stage, X_list, y_list, val, weights):
+        """The linear start (the BLA, fitted here or handed over), normalised,
+        with every monomial's coefficient zero."""
+        self.linear_model_ = self._linear_start(stage, X_list, y_list, check_period(self.period))
+        return self._normalised_start(X_list, y_list)
 
-        Parameters
-        ----------
-        X : array-like of shape (n_signals, n_samples, n_inputs), list of
-            2-D signals, or one 1-D/2-D signal
-        y : signals with n_outputs channels, same layout and lengths
-        X_val, y_val : signals or None, default=None
-            Validation signals: the iterate with the lowest rms simulation
-            error on them is kept (the toolbox's practice against
-            overfitting). Periodic ones are simulated in steady state. In a
-            grid search leave them out: the held-out signals of each split
-            do the validation there.
-        time_weight : signals or None, default=None
-            Non-negative weight of the squared error at each sample, in the
-            layout of ``y`` (with n_outputs channels, or one channel for all
-            outputs). Only with ``weighting=None``.
-
-        Returns
-        -------
-        self
-        """
-        X, stage = detach_stage(X)
-        X_list, y_list = self._validate_fit_data(X, y)
-        period = check_period(self.period)
-        weights = self._check_time_weight(time_weight, y_list)
-        val = self._check_validation(X_val, y_val)
-        self.linear_model_ = self._linear_start(stage, X_list, y_list, period)
-        model = self._normalised_start(X_list, y_list, period)
+    def _fit_from_start(self, start, objectives, settings, val, X_list):
+        """Levenberg-Marquardt on all degrees, or stage by stage on growing
+        degrees."""
+        self.degree_stages_ = degree_stages(self._degrees(), self.grow_degrees)
         try:
-            self._fit_nonlinear(model, X_list, y_list, period, weights, val)
+            return optimise_growing_degrees(start, objectives, settings, self.degree_stages_, val)
         except DivergenceError:
             raise ValueError(
                 "The linear start diverges on the training data; check the data or give "
                 "a stable linear_model."
             ) from None
-        self._export_user_units()
-        self.n_params_ = self._model.n_params
-        self.n_nonlinear_params_ = self._model.E.size + self._model.F.size
-        return self
 
     def _linear_start(self, stage, X_list, y_list, period):
         """The fitted BLA handed over by the previous Pipeline stage, or a
@@ -325,50 +293,29 @@ class PNLSSRegressor(StateSpaceRegressorBase):
             )
         return linear
 
-    def _normalised_start(self, X_list, y_list, period):
+    def _normalised_start(self, X_list, y_list):
         """The linear start with unit-rms inputs, outputs and states, E = F = 0.
         High-degree monomials of order-one variables stay well conditioned."""
         lin = self.linear_model_
         A, B, C, D = lin.A_, lin.B_, lin.C_, lin.D_
         n, m, p = A.shape[0], B.shape[1], C.shape[0]
-        self._u_scale = np.sqrt(np.mean(np.concatenate(X_list) ** 2, axis=0))
-        self._y_scale = np.sqrt(np.mean(np.concatenate(y_list) ** 2, axis=0))
-        if np.any(self._u_scale == 0):
+        if np.any(np.all(np.concatenate(X_list) == 0, axis=0)):
             raise ValueError("An input of X is identically zero: no excitation to identify a model from.")
-        self._y_scale[self._y_scale == 0] = 1.0
-        states = []
-        for U in X_list:
-            per = period if self._signal_is_periodic(U.shape[0]) else None
-            # Output the states themselves (C = I, D = 0) to measure their rms.
-            states.append(simulate_linear_signal(A, B, np.eye(n), np.zeros((n, m)), U, periodic_with=per))
-        x_scale = np.sqrt(np.mean(np.concatenate(states) ** 2, axis=0))
-        x_scale[x_scale == 0] = 1.0
-        self._x_scale = x_scale
+        # Output the states themselves (C = I, D = 0) to measure their rms.
+        states = [
+            simulate_linear_signal(A, B, np.eye(n), np.zeros((n, m)), U,
+                                   periodic_with=self.period if self._signal_is_periodic(U.shape[0]) else None)
+            for U in X_list
+        ]
+        u_scale, y_scale, x_scale = unit_rms_scales(X_list), unit_rms_scales(y_list), unit_rms_scales(states)
         T, Ti = np.diag(x_scale), np.diag(1 / x_scale)
-        Su, Sy_i = np.diag(self._u_scale), np.diag(1 / self._y_scale)
+        Su, Sy_i = np.diag(u_scale), np.diag(1 / y_scale)
         exE, exF = self._exponents(n, m)
-        return PNLSSModel(
+        normalised = PNLSSModel(
             A=Ti @ A @ T, B=Ti @ B @ Su, C=Sy_i @ C @ T, D=Sy_i @ D @ Su,
             E=np.zeros((n, exE.shape[0])), F=np.zeros((p, exF.shape[0])), exE=exE, exF=exF,
         )
-
-    def _fit_nonlinear(self, model, X_list, y_list, period, weights, val):
-        """LM on the full model, or stage by stage on growing degrees; sets
-        the fitted attributes."""
-        self.degree_stages_ = self._degree_stages()
-        objectives = self._objectives(X_list, y_list, period, weights, model.A)
-        fits, previous = [], None
-        for k, degrees in enumerate(self.degree_stages_):
-            last = k == len(self.degree_stages_) - 1
-            stage_model = _with_degrees(model, degrees, previous)
-            if self.verbose and len(self.degree_stages_) > 1:
-                print(f"degrees {degrees}", flush=True)
-            # The frequency weighting, when asked for, refines the last stage only.
-            fit = self._optimise(stage_model, objectives if last else objectives[:1], val,
-                                 max_iter=self.max_iter if last else self.max_iter // 2)
-            fits.append(fit)
-            previous = fit.model
-        self._set_fit_result(_chain_stages(fits))
+        return ScaledModel(normalised, u_scale, y_scale, x_scale)
 
     def _segment_threads(self):
         # None is 1 even inside a joblib backend context (a grid search's
@@ -383,50 +330,10 @@ class PNLSSRegressor(StateSpaceRegressorBase):
                           "output_equation": int(self.exponents_F_.shape[0])},
         }
 
-    def _export_user_units(self):
-        """Matrices in the user's units from the normalised model."""
-        mdl = self._model
-        T, Sy = self._export_linear_user_units()
-        var_scale = np.concatenate([self._x_scale, self._u_scale])
-        # zeta(x_n, u_n)_j = zeta_j(x, u) / prod(scale ** exponent)
-        self.E_ = T @ mdl.E / np.prod(var_scale ** mdl.exE, axis=1)
-        self.F_ = Sy @ mdl.F / np.prod(var_scale ** mdl.exF, axis=1)
-        self.exponents_E_ = mdl.exE.copy()
-        self.exponents_F_ = mdl.exF.copy()
-        self.trusted_range_ = mdl.bounds * var_scale[:, None]
-
-
-def _with_degrees(full, degrees, previous):
-    """``full`` (E = F = 0) restricted to the monomials of ``degrees``, with
-    the coefficients of ``previous``, the fit on ``degrees[:-1]`` (or None)."""
-    parts = {}
-    for name, ex, coef in (("E", full.exE, full.E), ("F", full.exF, full.F)):
-        keep = np.isin(ex.sum(axis=1), degrees)
-        parts[name], parts["ex" + name] = np.zeros_like(coef[:, keep]), ex[keep]
-        if previous is not None:
-            # Both keep the full model's column order, so the held columns line up.
-            held = np.isin(ex[keep].sum(axis=1), degrees[:-1])
-            parts[name][:, held] = getattr(previous, name)
-    linear = previous if previous is not None else full
-    return PNLSSModel(A=linear.A.copy(), B=linear.B.copy(), C=linear.C.copy(), D=linear.D.copy(), **parts)
-
-
-def _chain_stages(fits):
-    """One LMFit from consecutive stages, each starting where the previous
-    ended: iterations and validation history run on across the stages."""
-    if len(fits) == 1:
-        return fits[0]
-    last, done, best = fits[-1], fits[0].n_iter, fits[0].best_iteration
-    for fit in fits[1:]:
-        # Iteration 0 of a stage is the previous stage's kept iterate.
-        if fit.best_iteration > 0:
-            best = done + fit.best_iteration
-        done += fit.n_iter
-    val = None
-    if last.validation_history is not None:
-        # Each later stage's start repeats the previous stage's kept iterate.
-        val = np.concatenate([fits[0].validation_history] + [f.validation_history[1:] for f in fits[1:]])
-    return LMFit(
-        model=last.model, n_iter=done, best_iteration=best,
-        cost_history=last.cost_history, validation_history=val, validation_error=last.validation_error,
-    )
+    def _export(self, X_list):
+        user = super()._export(X_list)
+        self.E_, self.F_ = user.E, user.F
+        self.exponents_E_ = user.exE.copy()
+        self.exponents_F_ = user.exF.copy()
+        self.trusted_range_ = user.bounds
+        return user

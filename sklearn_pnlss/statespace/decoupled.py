@@ -1,5 +1,5 @@
 """The decoupled polynomial nonlinear state-space model."""
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -96,6 +96,28 @@ class DecoupledModel(StateSpaceModel):
         """Parameters of the branches: Wx, V and G, (2n + m + d) r, plus Wy
         when ``output_branches``."""
         return self.Wx.size + self.V.size + self.G.size + (self.Wy.size if self.output_branches else 0)
+
+    def rescaled(self, state_scale, input_scale, output_scale):
+        """The same model in the units where ``x = state_scale * x_n``,
+        ``u = input_scale * u_n`` and ``y = output_scale * y_n`` (this
+        model's variables being ``x_n, u_n, y_n``): it simulates the same
+        signals, rescaled."""
+        T, Ti = np.diag(state_scale), np.diag(1 / state_scale)
+        Su_i, Sy = np.diag(1 / input_scale), np.diag(output_scale)
+        # z = V_n^T s_n = V_n^T S^-1 s: V absorbs the scaling, so the
+        # branches, and their trusted ranges, are unchanged.
+        S_i = 1 / np.concatenate([state_scale, input_scale])
+        return replace(
+            self, A=T @ self.A @ Ti, B=T @ self.B @ Su_i, C=Sy @ self.C @ Ti, D=Sy @ self.D @ Su_i,
+            Wx=T @ self.Wx, Wy=Sy @ self.Wy, V=S_i[:, None] * self.V, G=self.G.copy(), bounds=self.bounds.copy(),
+        )
+
+    @property
+    def n_null_directions(self):
+        """n^2 for the state basis, and per branch: the scale shared by W
+        and g, the scale shared by V and g, and the linear term of g that A
+        and B absorb."""
+        return self.n_states**2 + 3 * self.n_branches
 
     def bounded_variables(self, states_inputs):
         """The branch inputs ``z = V^T s`` at the points ``s = [x; u]``

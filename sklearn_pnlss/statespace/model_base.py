@@ -12,6 +12,8 @@ from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
+from ..utils.validation import is_periodic
+
 # DivergenceError is documented where users import it: sklearn_pnlss.DivergenceError.
 __all__ = ["Segment", "StateSpaceModel", "unbounded"]
 
@@ -73,6 +75,12 @@ class StateSpaceModel:
     @property
     def n_params(self):
         return sum(M.size for M in self.blocks)
+
+    @property
+    def n_null_directions(self):
+        """Parameter directions that leave the output unchanged (dropped
+        from each Levenberg-Marquardt step): the n^2 of the state basis."""
+        return self.n_states**2
 
     def with_theta(self, theta):
         """A copy with the parameters ``theta`` (in block order)."""
@@ -137,17 +145,27 @@ class StateSpaceModel:
         x0 = None if period is None else self.steady_state_start(U[:period])
         return self.simulate(U, x0)[0]
 
+    def states_inputs(self, U, period=None):
+        """``[x; u]`` (N, n + m) along the simulation of one signal ``U``:
+        in periodic steady state when its length is a whole number of
+        ``period`` samples, else from rest. Raises :class:`DivergenceError`."""
+        x0 = self.steady_state_start(U[:period]) if is_periodic(U.shape[0], period) else None
+        return np.hstack([self.simulate_states(U, x0), U])
+
+    def trajectory(self, U_list, period=None):
+        """:meth:`states_inputs` of each signal of ``U_list``, stacked: the
+        region the model operates in on those inputs."""
+        return np.vstack([self.states_inputs(U, period) for U in U_list])
+
     def range_excursion(self, U, period=None):
         """How far the simulation of ``U`` (periodic steady state with
         ``period``) takes the nonlinearity's variables past their trusted
         range: the largest excursion as a fraction of the range's width (0
         inside it or without bounds, inf when the simulation diverges)."""
         try:
-            x0 = None if period is None else self.steady_state_start(U[:period])
-            X = self.simulate_states(U, x0)
+            v = self.bounded_variables(self.states_inputs(U, period))
         except DivergenceError:
             return np.inf
-        v = self.bounded_variables(np.hstack([X, U]))
         lo, hi = self.bounds[:, 0], self.bounds[:, 1]
         with np.errstate(invalid="ignore"):  # inf / inf without bounds
             excess = np.maximum(lo - v, v - hi).max(axis=0) / (hi - lo)

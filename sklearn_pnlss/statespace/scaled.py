@@ -1,0 +1,106 @@
+"""A fitted nonlinear state-space model in the user's units.
+
+Models are fitted on normalised signals (unit-rms inputs, outputs and
+states), where high-degree monomials stay well conditioned. A
+:class:`ScaledModel` keeps that normalised model together with the scales
+that bring it back to the user's units: it simulates user-unit signals and
+gives itself in user units. The estimators expose it as ``model_``.
+"""
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .model_base import StateSpaceModel
+
+__all__ = ["ScaledModel", "unit_rms_scales"]
+
+
+def unit_rms_scales(signals):
+    """rms of each channel over the signals (N_i, k), 1 where it is zero
+    (a silent channel has nothing to normalise)."""
+    scale = np.sqrt(np.mean(np.concatenate(signals) ** 2, axis=0))
+    scale[scale == 0] = 1.0
+    return scale
+
+
+@dataclass
+class ScaledModel:
+    """A state-space model of normalised signals with the scales of its
+    inputs, outputs and states.
+
+    ``u = input_scale * u_n``, ``y = output_scale * y_n`` and
+    ``x = state_scale * x_n``, where ``u_n, y_n, x_n`` are the variables of
+    ``normalised``.
+
+    Parameters
+    ----------
+    normalised : PNLSSModel or DecoupledModel
+        The model in normalised units (what Levenberg-Marquardt fits).
+    input_scale : ndarray of shape (n_inputs,)
+    output_scale : ndarray of shape (n_outputs,)
+    state_scale : ndarray of shape (n_states,)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sklearn_pnlss.statespace.pnlss import PNLSSModel
+    >>> from sklearn_pnlss.statespace.scaled import ScaledModel
+    >>> ex = np.array([[2, 0]])  # x**2
+    >>> unit = PNLSSModel(A=np.array([[0.5]]), B=np.array([[1.0]]), C=np.array([[1.0]]),
+    ...                   D=np.array([[0.0]]), E=np.array([[0.1]]), F=np.zeros((1, 0)),
+    ...                   exE=ex, exF=np.zeros((0, 2), dtype=int))
+    >>> model = ScaledModel(unit, input_scale=np.array([2.0]), output_scale=np.array([3.0]),
+    ...                     state_scale=np.array([5.0]))
+    >>> U = np.array([[2.0], [4.0], [0.0]])
+    >>> # x_n: 0, 1, 0.5 + 2 + 0.1 = 2.6; y = 3 x_n
+    >>> model.simulate(U).ravel().round(12).tolist()
+    [0.0, 3.0, 7.8]
+    >>> np.allclose(model.in_user_units().simulate(U)[0], model.simulate(U))
+    True
+    """
+
+    normalised: StateSpaceModel
+    input_scale: np.ndarray
+    output_scale: np.ndarray
+    state_scale: np.ndarray
+
+    @property
+    def n_states(self):
+        return self.normalised.n_states
+
+    @property
+    def n_params(self):
+        return self.normalised.n_params
+
+    def with_normalised(self, normalised):
+        """The same scales around another normalised model."""
+        return replace(self, normalised=normalised)
+
+    def normalise_inputs(self, U):
+        """``U`` (N, m) in normalised units."""
+        return U / self.input_scale
+
+    def simulate(self, U, period=None):
+        """Output (N, p) for the input ``U`` (N, m), both in the user's
+        units: in periodic steady state with ``period`` (the length a
+        multiple of it), else from rest. Raises
+        :class:`~sklearn_pnlss.DivergenceError` when the simulation
+        diverges."""
+        return self.normalised.simulate_signal(self.normalise_inputs(U), period) * self.output_scale
+
+    def states_inputs(self, U, period=None):
+        """``[x; u]`` (N, n + m) in the user's units along the simulation of
+        ``U`` (periodic steady state for a signal of whole periods)."""
+        s = self.normalised.states_inputs(self.normalise_inputs(U), period)
+        return s * np.concatenate([self.state_scale, self.input_scale])
+
+    def range_excursion(self, U, period=None):
+        """How far the simulation of ``U`` takes the nonlinearity past its
+        trusted range (see
+        :meth:`~sklearn_pnlss.statespace.model_base.StateSpaceModel.range_excursion`)."""
+        return self.normalised.range_excursion(self.normalise_inputs(U), period)
+
+    def in_user_units(self):
+        """The model itself in the user's units (a model of the same class,
+        which simulates user-unit signals directly)."""
+        return self.normalised.rescaled(self.state_scale, self.input_scale, self.output_scale)
