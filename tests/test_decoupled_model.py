@@ -183,7 +183,7 @@ def test_start_recovers_an_exactly_decoupled_pnlss(output_branches, linear_in_E)
     # W g(V^T s) reproduces f's nonlinear part on the trajectory
     nonlinear = pnlss.exE.sum(axis=1) >= 2
     f = polynomial_map(pnlss.E[:, nonlinear], pnlss.exE[nonlinear], S)
-    f_start = evaluate_branches(start.G[:, 1:], S @ start.V) @ start.Wx.T
+    f_start = evaluate_branches(start.G, S @ start.V) @ start.Wx.T
     assert np.abs(f - f_start).max() < 1e-6 * np.abs(f).max()
     Y_ref = pnlss.simulate(U)[0]
     Y = start.simulate(U)[0]

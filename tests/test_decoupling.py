@@ -37,7 +37,7 @@ def decoupled():
     rng = np.random.default_rng(1)
     W = rng.normal(size=(N_OUT, 2))
     V = rng.normal(size=(N_VARS, 2))
-    coef = np.array([[0.8, -0.5], [-0.3, 0.7]])
+    coef = np.array([[0.0, 0.8, -0.5], [0.0, -0.3, 0.7]])  # degrees 1..3, no linear term
     exponents = monomial_exponents(N_VARS, (2, 3))
     fit_points = rng.normal(size=(200, N_VARS))
     zeta = polynomial_map(np.eye(len(exponents)), exponents, fit_points)
@@ -132,15 +132,16 @@ def test_exactly_decoupled_map_is_recovered(decoupled):
         assert sorted(cos.argmax(axis=1)) == [0, 1]
 
     coef = fit_branches(V, H, points, degree=3)
-    assert coef.shape == (2, 2)
+    assert coef.shape == (2, 3)
+    np.testing.assert_array_equal(coef[:, 0], 0.0)
     new_points = np.random.default_rng(7).normal(size=(100, N_VARS))
     f_true = polynomial_map(d["E"], d["exponents"], new_points)
     f_dec = decoupled_map(W, V, coef, new_points)
     assert np.linalg.norm(f_dec - f_true) / np.linalg.norm(f_true) < 1e-8
     # a higher branch degree finds zero coefficients beyond degree 3
     coef5 = fit_branches(V, H, points, degree=5)
-    np.testing.assert_allclose(coef5[:, :2], coef, rtol=1e-7)
-    assert np.abs(coef5[:, 2:]).max() < 1e-7 * np.abs(coef).max()
+    np.testing.assert_allclose(coef5[:, :3], coef, rtol=1e-7, atol=1e-12)
+    assert np.abs(coef5[:, 3:]).max() < 1e-7 * np.abs(coef).max()
 
 
 def test_cpd_normalisation_convention():
@@ -180,7 +181,7 @@ def test_exact_tensor_is_polished_below_tensorly_error_floor():
     rng = np.random.default_rng(2)
     W, V = rng.normal(size=(N_OUT, 2)), rng.normal(size=(N_VARS, 2))
     points = rng.normal(size=(300, N_VARS))
-    H = branch_derivatives(rng.normal(size=(2, 2)), points @ V)
+    H = branch_derivatives(np.column_stack([np.zeros(2), rng.normal(size=(2, 2))]), points @ V)
     J = np.einsum("il,vl,kl->ivk", W, V, H)
     errors = [decompose_jacobian(J, 2, random_state=s).error for s in range(5)]
     assert max(errors) < 1e-9
@@ -197,7 +198,7 @@ def test_nearly_collinear_branches_are_recovered():
     W = np.column_stack([w, w + 0.15 * np.linalg.norm(w) * rng.normal(size=N_OUT)])
     V = rng.normal(size=(N_VARS, 2))
     points = rng.normal(size=(300, N_VARS))
-    H = branch_derivatives([[0.8, 0.3], [-0.7, 1.4]], points @ V)
+    H = branch_derivatives([[0.0, 0.8, 0.3], [0.0, -0.7, 1.4]], points @ V)
     J = np.einsum("il,vl,kl->ivk", W, V, H)
     cos = abs(W[:, 0] @ W[:, 1]) / np.prod(np.linalg.norm(W, axis=0))
     assert cos > 0.998
@@ -246,17 +247,40 @@ def test_fit_branches_drops_the_linear_term_and_handles_scale():
     z = (points @ v)[:, 0]
     H = (4.0 + 1.0 * z + 6.0 * z**2 - 4.0 * z**3)[:, None]
     coef = fit_branches(v, H, points, degree=4)
-    np.testing.assert_allclose(coef, [[0.5, 2.0, -1.0]], rtol=1e-8)
+    np.testing.assert_allclose(coef, [[0.0, 0.5, 2.0, -1.0]], rtol=1e-8)
 
 
-def test_branch_values_and_derivatives_agree():
+@pytest.mark.parametrize("bounds, linear", [(None, False), ([[-0.5, 0.4], [-1.0, 1.0], [-0.2, 2.0]], False),
+                                            ([[-0.5, 0.4], [-1.0, 1.0], [-0.2, 2.0]], True)])
+def test_branch_values_and_derivatives_agree(bounds, linear):
     rng = np.random.default_rng(8)
-    coef = rng.normal(size=(3, 4))  # degrees 2..5
+    coef = rng.normal(size=(3, 5))  # degrees 1..5
     Z = rng.normal(size=(20, 3))
     h = 1e-6
-    fd = (evaluate_branches(coef, Z + h) - evaluate_branches(coef, Z - h)) / (2 * h)
-    np.testing.assert_allclose(branch_derivatives(coef, Z), fd, rtol=1e-6, atol=1e-8)
-    np.testing.assert_allclose(evaluate_branches(coef, np.zeros((1, 3))), 0.0)
+    fd = (evaluate_branches(coef, Z + h, bounds, linear) - evaluate_branches(coef, Z - h, bounds, linear)) / (2 * h)
+    np.testing.assert_allclose(branch_derivatives(coef, Z, bounds, linear), fd, rtol=1e-6, atol=1e-8)
+    np.testing.assert_allclose(evaluate_branches(coef, np.zeros((1, 3)), bounds, linear), 0.0)
+
+
+@pytest.mark.parametrize("linear", [False, True])
+def test_branch_evaluator_is_the_kernels_twin(linear):
+    """One step of the compiled decoupled model from x = 0 with A = 0 and
+    B = 0 gives x(1) = Wx g(V^T [0; u]): the kernel's branch values, outside
+    the trusted range too, are the Python evaluator's."""
+    from sklearn_pnlss.statespace.decoupled import DecoupledModel
+
+    rng = np.random.default_rng(3)
+    r, d, m = 3, 6, 3
+    V = np.vstack([np.zeros((1, r)), np.eye(m)])  # z = u
+    G = rng.normal(size=(r, d))
+    bounds = np.array([[-0.5, 0.4], [-1.0, 1.0], [-0.2, 2.0]])
+    model = DecoupledModel(
+        A=np.zeros((1, 1)), B=np.zeros((1, m)), C=np.eye(1), D=np.zeros((1, m)), Wx=np.ones((1, r)),
+        Wy=np.zeros((1, r)), V=V, G=G, bounds=bounds, linear_extrapolation=linear,
+    )
+    U = 1.5 * rng.normal(size=(40, m))  # about half the points outside the range
+    x1 = np.array([model.simulate_states(np.vstack([u, np.zeros(m)]))[1, 0] for u in U])
+    np.testing.assert_allclose(x1, evaluate_branches(G, U, bounds, linear).sum(axis=1), rtol=1e-12, atol=1e-12)
 
 
 # --- validation ----------------------------------------------------------------
@@ -295,4 +319,4 @@ def test_bad_input_raises_value_error_naming_the_argument():
     with pytest.raises(ValueError, match="n_points"):
         sample_points(points, n_points=0)
     with pytest.raises(ValueError, match="coef"):
-        decoupled_map(rng.normal(size=(N_OUT, 2)), V, np.ones((3, 2)), points)
+        decoupled_map(rng.normal(size=(N_OUT, 2)), V, np.ones((3, 3)), points)

@@ -9,7 +9,7 @@ The start of the decoupled model ``f(s) ~ W g(V^T s)``, in four steps:
 3. :func:`decompose_jacobian` computes its rank-``r`` CPD ``[[W, V, H]]``
    (:func:`rank_scan` helps choose ``r``);
 4. :func:`fit_branches` turns ``H`` into polynomial branches ``g_l`` of
-   degrees 2..d; :func:`decoupled_map` evaluates the result.
+   degrees 2..d (coefficients of shape (r, d), one per degree 1..d); :func:`decoupled_map` evaluates the result.
 """
 from .branches import (
     branch_derivatives,

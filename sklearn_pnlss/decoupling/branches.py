@@ -5,10 +5,16 @@ samples the derivative ``g_l'(z)`` at ``z = v_l^T s_k``. A polynomial fit of
 ``g_l'`` and its integration give the branches of
 ``f(s) ~ W g(V^T s)``.
 
-A branch of degree ``d`` is ``g_l(z) = sum_{p=2..d} coef[l, p-2] z**p``: it
-has no constant term (a constant shift of the state equation is not part of
-the model) and no linear term (the linear part of the model lives in
-``A, B, C, D``), so ``d - 1`` coefficients per branch.
+One convention throughout the library (these functions, the decoupled
+model, its compiled kernels and ``DecoupledPNLSSRegressor.coef_``): a branch
+of degree ``d`` is ``g_l(z) = sum_{k=0..d-1} coef[l, k] z**(k+1)``, a
+coefficient array of shape (r, d). It has no constant term (a constant shift
+of the state equation is not part of the model). Its linear term
+``coef[:, 0]`` is redundant with ``A, B, C, D``: :func:`fit_branches` leaves
+it at zero, the fit may move it.
+
+:func:`evaluate_branches` and :func:`branch_derivatives` are the Python twins
+of the compiled kernels' branch evaluation, trusted range included.
 """
 import numbers
 
@@ -59,8 +65,9 @@ def fit_branches(V, H, points, degree):
 
     Returns
     -------
-    coef : ndarray of shape (r, degree - 1)
-        ``coef[l, k]`` multiplies ``z ** (k + 2)`` in ``g_l``.
+    coef : ndarray of shape (r, degree)
+        ``coef[l, k]`` multiplies ``z ** (k + 1)`` in ``g_l``; the linear
+        column ``coef[:, 0]`` is zero.
 
     Notes
     -----
@@ -79,7 +86,7 @@ def fit_branches(V, H, points, degree):
     >>> z = np.linspace(-1.0, 1.0, 11)
     >>> H = (2 * z + 3 * z**2)[:, None]  # g'(z) of g(z) = z**2 + z**3
     >>> fit_branches([[1.0]], H, z[:, None], degree=3).round(12).tolist()
-    [[1.0, 1.0]]
+    [[0.0, 1.0, 1.0]]
     """
     V = check_array(V, dtype=np.float64, input_name="V")
     H = check_array(H, dtype=np.float64, input_name="H")
@@ -105,7 +112,7 @@ def fit_branches(V, H, points, degree):
         )
     degree = int(degree)
     Z = points @ V
-    coef = np.empty((V.shape[1], degree - 1))
+    coef = np.zeros((V.shape[1], degree))
     # Derivative degrees 0..d-1; degree 0 is only there to absorb a constant.
     powers = np.arange(degree)
     for branch in range(V.shape[1]):
@@ -118,19 +125,44 @@ def fit_branches(V, H, points, degree):
         design = (z / scale)[:, None] ** powers
         a = np.linalg.lstsq(design, H[:, branch], rcond=None)[0]
         deriv = a[1:] / scale ** powers[1:]  # g_l' coefficients of z**1..z**(d-1)
-        coef[branch] = deriv / (powers[1:] + 1)  # integrate: z**p -> z**(p+1)/(p+1)
+        coef[branch, 1:] = deriv / (powers[1:] + 1)  # integrate: z**p -> z**(p+1)/(p+1)
     return coef
 
 
-def evaluate_branches(coef, Z):
-    """Values of the branches, ``G[k, l] = g_l(Z[k, l])``.
+def _held(coef, Z, bounds):
+    """``coef`` and ``Z`` checked, and ``Z`` held inside ``bounds`` (r, 2)."""
+    coef = _check_coef(coef)
+    Z = _check_Z(coef, Z)
+    if bounds is None:
+        return coef, Z, Z
+    bounds = np.asarray(bounds, dtype=np.float64)
+    if bounds.shape != (coef.shape[0], 2):
+        raise ValueError(f"bounds must have shape (r, 2) = ({coef.shape[0]}, 2); got {bounds.shape}.")
+    return coef, Z, np.clip(Z, bounds[:, 0], bounds[:, 1])
+
+
+def _polynomial(coef, Z):
+    """g and g' of the plain polynomials at Z (N, r)."""
+    powers = Z[:, :, None] ** np.arange(coef.shape[1])  # z**k, k = 0..d-1
+    k1 = np.arange(1, coef.shape[1] + 1)
+    return np.einsum("nlk,lk->nl", powers * Z[:, :, None], coef), np.einsum("nlk,lk->nl", powers, coef * k1)
+
+
+def evaluate_branches(coef, Z, bounds=None, linear_extrapolation=False):
+    """Values of the branches, ``G[k, l] = g_l(Z[k, l])``, as the decoupled
+    model evaluates them.
 
     Parameters
     ----------
-    coef : array-like of shape (r, degree - 1)
-        Branch coefficients, ``coef[l, k]`` multiplies ``z ** (k + 2)``.
+    coef : array-like of shape (r, degree)
+        Branch coefficients, ``coef[l, k]`` multiplies ``z ** (k + 1)``.
     Z : array-like of shape (N, r)
         Branch arguments, ``Z = points @ V``.
+    bounds : array-like of shape (r, 2) or None, default=None
+        Trusted range of each branch input; outside it the branch keeps its
+        edge value, or, with ``linear_extrapolation``, follows its edge
+        tangent. None: the plain polynomials.
+    linear_extrapolation : bool, default=False
 
     Returns
     -------
@@ -138,24 +170,27 @@ def evaluate_branches(coef, Z):
 
     Examples
     --------
-    >>> evaluate_branches([[1.0, 1.0]], [[2.0]]).tolist()  # z**2 + z**3 at 2
+    >>> evaluate_branches([[0.0, 1.0, 1.0]], [[2.0]]).tolist()  # z**2 + z**3 at 2
     [[12.0]]
+    >>> evaluate_branches([[0.0, 1.0, 1.0]], [[3.0]], bounds=[[-2.0, 2.0]]).tolist()  # held at 2
+    [[12.0]]
+    >>> evaluate_branches([[0.0, 1.0, 1.0]], [[3.0]], [[-2.0, 2.0]], linear_extrapolation=True).tolist()
+    [[28.0]]
     """
-    coef = _check_coef(coef)
-    Z = _check_Z(coef, Z)
-    powers = np.arange(2, coef.shape[1] + 2)
-    return np.einsum("klp,lp->kl", Z[:, :, None] ** powers, coef)
+    coef, Z, Zc = _held(coef, Z, bounds)
+    g, dg = _polynomial(coef, Zc)
+    return g + dg * (Z - Zc) if linear_extrapolation else g
 
 
-def branch_derivatives(coef, Z):
-    """Derivatives of the branches, ``G'[k, l] = g_l'(Z[k, l])``.
+def branch_derivatives(coef, Z, bounds=None, linear_extrapolation=False):
+    """Derivatives of the branches, ``G'[k, l] = g_l'(Z[k, l])``, as the
+    decoupled model evaluates them (zero where a branch is held, the edge
+    slope where it follows its tangent).
 
     Parameters
     ----------
-    coef : array-like of shape (r, degree - 1)
-        Branch coefficients, ``coef[l, k]`` multiplies ``z ** (k + 2)``.
-    Z : array-like of shape (N, r)
-        Branch arguments, ``Z = points @ V``.
+    coef, Z, bounds, linear_extrapolation
+        As in :func:`evaluate_branches`.
 
     Returns
     -------
@@ -163,13 +198,12 @@ def branch_derivatives(coef, Z):
 
     Examples
     --------
-    >>> branch_derivatives([[1.0, 1.0]], [[2.0]]).tolist()  # 2z + 3z**2 at 2
+    >>> branch_derivatives([[0.0, 1.0, 1.0]], [[2.0]]).tolist()  # 2z + 3z**2 at 2
     [[16.0]]
     """
-    coef = _check_coef(coef)
-    Z = _check_Z(coef, Z)
-    powers = np.arange(2, coef.shape[1] + 2)
-    return np.einsum("klp,lp->kl", Z[:, :, None] ** (powers - 1), coef * powers)
+    coef, Z, Zc = _held(coef, Z, bounds)
+    dg = _polynomial(coef, Zc)[1]
+    return dg if linear_extrapolation else np.where(Z == Zc, dg, 0.0)
 
 
 def decoupled_map(W, V, coef, points):
@@ -184,8 +218,8 @@ def decoupled_map(W, V, coef, points):
         Output factor (how the branches combine into the outputs).
     V : array-like of shape (n_vars, r)
         Variable factor (one direction per branch).
-    coef : array-like of shape (r, degree - 1)
-        Branch coefficients from :func:`fit_branches`.
+    coef : array-like of shape (r, degree)
+        Branch coefficients (see :func:`fit_branches`).
     points : array-like of shape (N, n_vars)
         Where to evaluate, one point per row.
 
@@ -197,7 +231,7 @@ def decoupled_map(W, V, coef, points):
     Examples
     --------
     >>> # one branch g(z) = z**2 along v = (1, 1), fed to two outputs
-    >>> decoupled_map([[1.0], [2.0]], [[1.0], [1.0]], [[1.0]], [[1.0, 2.0]]).tolist()
+    >>> decoupled_map([[1.0], [2.0]], [[1.0], [1.0]], [[0.0, 1.0]], [[1.0, 2.0]]).tolist()
     [[9.0, 18.0]]
     """
     W = check_array(W, dtype=np.float64, input_name="W")

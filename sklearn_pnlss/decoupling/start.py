@@ -124,10 +124,7 @@ def decoupled_start(pnlss_model, states_inputs, n_branches, degree, *, n_points=
     points = sample_points(states_inputs, n_points=n_points, random_state=rng)
     J = _jacobian_tensor(E, exE, F, exF, points)
     W, V, H, cpd_error = decompose_jacobian(J, n_branches, random_state=rng)
-    coef = fit_branches(V, H, points, degree)
-
-    G = np.zeros((W.shape[1], degree))
-    G[:, 1:] = coef
+    G = fit_branches(V, H, points, degree)
     model = DecoupledModel(
         A=pnlss_model.A + Ex_lin,
         B=pnlss_model.B + Eu_lin,

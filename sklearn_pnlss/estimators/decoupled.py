@@ -10,6 +10,7 @@ from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
 
+from ..decoupling.branches import evaluate_branches
 from ..decoupling.start import decoupled_start
 from ..inspection import lm_fit_figures
 from ..statespace.fitting import optimise
@@ -331,7 +332,8 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
 
     def branch_values(self, z=None, n_points=200):
         """Each branch ``g_l`` evaluated on a grid (for plots and
-        interpretation).
+        interpretation), as the model evaluates it: outside its trusted
+        range (``trusted_range_``) continued as ``extrapolation`` says.
 
         Parameters
         ----------
@@ -345,11 +347,12 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         z : ndarray of shape (n_z, n_branches)
         g : ndarray of shape (n_z, n_branches)
         """
+        check_is_fitted(self)
         if z is None:
             lo, hi = self.z_range_[:, 0], self.z_range_[:, 1]
             z = lo + np.linspace(0.0, 1.0, n_points)[:, None] * (hi - lo)
         z = np.asarray(z, dtype=float)
         if z.ndim == 1:
             z = np.repeat(z[:, None], self.coef_.shape[0], axis=1)
-        powers = z[:, :, None] ** np.arange(1, self.coef_.shape[1] + 1)
-        return z, np.einsum("nlk,lk->nl", powers, self.coef_)
+        model = self.model_.normalised
+        return z, evaluate_branches(self.coef_, z, model.bounds, model.linear_extrapolation)
