@@ -57,7 +57,9 @@ class EffectFit:
 
 def with_recalibration(effect, recalibration):
     """The effect with the nominal mass, damping and stiffness free too."""
-    n = effect.n_params
+    # Split theta by the effect's own fitted parameters (its bounds), not by
+    # the parameters it reports: hysteresis reports beta, which is fixed.
+    n = effect.bounds[0].size
 
     def build(theta, nominal, scales):
         forces, _, transform, physical = effect.build(theta[:n], nominal, scales)
