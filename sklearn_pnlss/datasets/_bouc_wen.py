@@ -6,7 +6,7 @@ import numpy as np
 from sklearn.utils import Bunch, check_random_state
 
 from ..physics import BoucWen, Oscillator, band_limited_noise, decimate_fir, upsample_fft
-from ..physics.resampling import _check_signal
+from ..physics.resampling import check_signal
 from ..signals import bouc_wen_sweep, multisine
 
 __all__ = ["bouc_wen_oscillator", "simulate_bouc_wen", "make_bouc_wen",
@@ -113,7 +113,7 @@ def simulate_bouc_wen(u, *, periodic, decimation=(2, 2, 5), noise_rms=0.0,
     >>> y.shape
     (1024,)
     """
-    u = _check_signal(u, "u")
+    u = check_signal(u, "u")
     return bouc_wen_oscillator().simulate(
         u, fs=FS, periodic=periodic, oversampling=OVERSAMPLING, decimation=decimation,
         noise_rms=noise_rms, random_state=random_state,

@@ -49,11 +49,6 @@ def check_signal(x, name="x"):
     return x
 
 
-# Old private name, still imported by sklearn_pnlss/datasets/_bouc_wen.py
-# until that module switches to check_signal.
-_check_signal = check_signal
-
-
 def fir_decimation_filter(r):
     """Coefficients of MATLAB's ``fir1(30, 1/r)`` (Hamming, unit DC gain).
 
