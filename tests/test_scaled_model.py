@@ -84,3 +84,20 @@ def test_rescaled_pnlss_coefficients_by_hand():
 def test_unit_rms_scales():
     signals = [np.array([[3.0, 0.0], [-3.0, 0.0]]), np.array([[3.0, 0.0]])]
     np.testing.assert_array_equal(unit_rms_scales(signals), [3.0, 1.0])  # silent channel: 1
+
+
+def test_every_estimator_exposes_its_model(small_pipeline, small_data):
+    """BLA, PNLSS and decoupled: ``model_`` simulates what ``predict`` gives,
+    and its user-unit form holds the exported matrices."""
+    period = small_pipeline[0].period
+    for est in small_pipeline:
+        model = est.model_
+        user = model.in_user_units()
+        for name in "ABCD":
+            np.testing.assert_allclose(getattr(user, name), getattr(est, name + "_"), rtol=1e-12, atol=1e-14)
+        X = small_data.X_val
+        y_pred = est.predict(X)
+        for U, Y in zip(X, y_pred):
+            # BLA predicts with the exact linear steady state; the model's
+            # steady state is iterated to 1e-10.
+            np.testing.assert_allclose(model.simulate(U, period), Y, rtol=1e-8, atol=1e-9 * np.abs(Y).max())

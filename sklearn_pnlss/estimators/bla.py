@@ -7,6 +7,7 @@ from sklearn.utils._param_validation import Interval
 
 from ..frequency.bla import periodic_bla, welch_bla
 from ..statespace.linear import frequency_response, modal_parameters, simulate_linear_signal
+from ..statespace.scaled import linear_scaled_model
 from ..statespace.subspace import fd_refine, fd_subspace
 from ..utils.validation import check_period
 from ._base import SignalRegressorBase
@@ -63,6 +64,12 @@ class BLAEstimator(SignalRegressorBase):
     ----------
     A_, B_, C_, D_ : ndarray
         The linear model.
+    model_ : ScaledModel
+        The same model as the nonlinear estimators' fitted model (a
+        :class:`~sklearn_pnlss.statespace.scaled.ScaledModel` around a
+        polynomial model without monomials, unit scales): it simulates
+        (``model_.simulate(U, period)``) and exports itself
+        (``model_.in_user_units()``).
     lines_ : ndarray of int
         Excited DFT bins the BLA is estimated at.
     frequencies_ : ndarray
@@ -248,6 +255,7 @@ class BLAEstimator(SignalRegressorBase):
         if self.refine:
             A, B, C, D = fd_refine(A, B, C, D, self.frf_, z, var=var, estimate_d=self.feedthrough)
         self.A_, self.B_, self.C_, self.D_ = A, B, C, D
+        self.model_ = linear_scaled_model(A, B, C, D)
         self.frf_model_ = frequency_response(A, B, C, D, z)
         fs = 1.0 if self.fs is None else float(self.fs)
         self.frequencies_ = self.lines_ * fs / self._n_per_period

@@ -145,6 +145,14 @@ class PNLSSRegressor(StateSpaceRegressorBase):
     ----------
     A_, B_, C_, D_, E_, F_ : ndarray
         Model matrices in the user's units.
+    model_ : ScaledModel
+        The fitted model as one object
+        (:class:`~sklearn_pnlss.statespace.scaled.ScaledModel`): the model in
+        normalised units (``model_.normalised``, what Levenberg-Marquardt
+        fitted) with the input, output and state scales. It simulates in the
+        user's units (``model_.simulate(U, period)``) and gives itself in
+        them (``model_.in_user_units()``, from which the attributes below
+        are read).
     exponents_E_, exponents_F_ : ndarray of int of shape (n_terms, n_states + n_inputs)
         Monomial exponents over ``[x; u]`` of the columns of ``E_`` and ``F_``.
     linear_model_ : BLAEstimator

@@ -11,8 +11,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .model_base import StateSpaceModel
+from .pnlss import PNLSSModel
 
-__all__ = ["ScaledModel", "unit_rms_scales"]
+__all__ = ["ScaledModel", "linear_scaled_model", "unit_rms_scales"]
 
 
 def unit_rms_scales(signals):
@@ -104,3 +105,12 @@ class ScaledModel:
         """The model itself in the user's units (a model of the same class,
         which simulates user-unit signals directly)."""
         return self.normalised.rescaled(self.state_scale, self.input_scale, self.output_scale)
+
+
+def linear_scaled_model(A, B, C, D):
+    """A linear model ``A, B, C, D`` as a :class:`ScaledModel` (a
+    polynomial model without monomials, unit scales)."""
+    n, m, p = A.shape[0], B.shape[1], C.shape[0]
+    linear = PNLSSModel(A=A, B=B, C=C, D=D, E=np.zeros((n, 0)), F=np.zeros((p, 0)),
+                        exE=np.zeros((0, n + m), dtype=np.int64), exF=np.zeros((0, n + m), dtype=np.int64))
+    return ScaledModel(linear, np.ones(m), np.ones(p), np.ones(n))
