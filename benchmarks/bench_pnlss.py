@@ -96,7 +96,7 @@ class _Timers:
 
 def _timed_fit(X, y, degrees, iterations, average):
     """One instrumented fit; per-call times of the pieces."""
-    import sklearn_pnlss.estimators._statespace as est_module
+    import sklearn_pnlss.statespace.fitting as engine
     from sklearn_pnlss import PNLSSRegressor
     from sklearn_pnlss.statespace.objective import SimulationError
     from sklearn_pnlss.statespace.pnlss import PNLSSModel
@@ -108,7 +108,7 @@ def _timed_fit(X, y, degrees, iterations, average):
     with timers.wrap(SimulationError, "residual", "simulation"), \
             timers.wrap(PNLSSModel, "segment_jacobian", "jacobian_segment"), \
             timers.wrap(SimulationError, "normal_equations", "normal_equations"), \
-            timers.wrap(est_module, "levenberg_marquardt", "lm"):
+            timers.wrap(engine, "levenberg_marquardt", "lm"):
         t0 = time.perf_counter()
         est.fit(X, y)
         t_fit = time.perf_counter() - t0
