@@ -3,10 +3,11 @@ from importlib.metadata import PackageNotFoundError, version
 
 from .estimators import BLAEstimator, DecoupledPNLSSRegressor, PNLSSRegressor
 from .statespace.model_base import DivergenceError
+from .statespace.scaled import ScaledModel
 
 try:
     __version__ = version("sklearn_pnlss")
 except PackageNotFoundError:  # pragma: no cover - running from a source tree
     __version__ = "0+unknown"
 
-__all__ = ["BLAEstimator", "DecoupledPNLSSRegressor", "DivergenceError", "PNLSSRegressor", "__version__"]
+__all__ = ["BLAEstimator", "DecoupledPNLSSRegressor", "DivergenceError", "PNLSSRegressor", "ScaledModel", "__version__"]

@@ -4,7 +4,8 @@ Models are fitted on normalised signals (unit-rms inputs, outputs and
 states), where high-degree monomials stay well conditioned. A
 :class:`ScaledModel` keeps that normalised model together with the scales
 that bring it back to the user's units: it simulates user-unit signals and
-gives itself in user units. The estimators expose it as ``model_``.
+gives itself in user units. The estimators expose it as ``model_``; users
+import the class as ``sklearn_pnlss.ScaledModel``.
 """
 from dataclasses import dataclass, replace
 
@@ -33,6 +34,14 @@ class ScaledModel:
     ``x = state_scale * x_n``, where ``u_n, y_n, x_n`` are the variables of
     ``normalised``.
 
+    What a fitted estimator's ``model_`` is. :meth:`in_user_units` gives the
+    model itself in the user's units: a ``PNLSSModel`` (fields ``A, B, C,
+    D, E, F``, the monomial exponents ``exE, exF`` over ``[x; u]`` and the
+    trusted box ``bounds``) or a ``DecoupledModel`` (``A, B, C, D, Wx, Wy,
+    V``, the branch coefficients ``G`` of ``z**1 .. z**d`` and the branch
+    inputs' trusted ranges ``bounds``), with ``simulate(U, x0)`` and
+    ``simulate_states(U, x0)``.
+
     Parameters
     ----------
     normalised : PNLSSModel or DecoupledModel
@@ -45,7 +54,7 @@ class ScaledModel:
     --------
     >>> import numpy as np
     >>> from sklearn_pnlss.statespace.pnlss import PNLSSModel
-    >>> from sklearn_pnlss.statespace.scaled import ScaledModel
+    >>> from sklearn_pnlss import ScaledModel
     >>> ex = np.array([[2, 0]])  # x**2
     >>> unit = PNLSSModel(A=np.array([[0.5]]), B=np.array([[1.0]]), C=np.array([[1.0]]),
     ...                   D=np.array([[0.0]]), E=np.array([[0.1]]), F=np.zeros((1, 0)),
