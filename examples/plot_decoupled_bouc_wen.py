@@ -42,7 +42,6 @@ from sklearn_pnlss import DecoupledPNLSSRegressor, PNLSSRegressor
 from sklearn_pnlss.datasets import load_bouc_wen_official, make_bouc_wen
 from sklearn_pnlss.metrics import rms_error
 from sklearn_pnlss.plotting import plot_branches, plot_error_spectra, plot_time_errors
-from sklearn_pnlss.utils.handover import attach_stage
 
 data = make_bouc_wen(n_realizations=3, n_periods=2, rms=55.0, random_state=0)
 P, fs = data.period, data.fs
@@ -92,9 +91,9 @@ n_nonlinear = {"linear (BLA)": 0, "full PNLSS": full.n_nonlinear_params_}
 # Each candidate has ``r`` branches of degree ``d`` (terms of degrees 1 to
 # ``d``), that is ``(2 n + d + 1) r`` nonlinear parameters with ``n = 3``
 # states: ``r`` columns of ``W_x`` and of ``V`` and ``d`` coefficients per
-# branch. Every candidate starts from the *same* fitted full model: attached
-# to the training signals with ``sklearn_pnlss.utils.handover.attach_stage``,
-# it is taken as the start instead of being fitted again (the hand-over a
+# branch. Every candidate starts from the *same* fitted full model: its
+# ``transform`` attaches it to the training signals, and the candidate's
+# ``fit`` takes it as the start instead of fitting it again (the hand-over a
 # ``Pipeline`` of the two estimators does). Two starts per candidate (random
 # sampling points of the Jacobian tensor and CPD starts) run in parallel; the
 # one best on the validation period is kept.
@@ -107,7 +106,7 @@ models = {}
 for r in branches:
     for d in degrees:
         model = DecoupledPNLSSRegressor(3, n_branches=r, degree=d, period=P, n_init=2, n_jobs=2, random_state=0)
-        model.fit(attach_stage(X_train, full), y_train, X_val=X_val, y_val=y_val)
+        model.fit(full.transform(X_train), y_train, X_val=X_val, y_val=y_val)
         models[r, d] = model
         errors[f"decoupled r={r}, d={d}"] = test_errors(model)
         n_nonlinear[f"decoupled r={r}, d={d}"] = model.n_nonlinear_params_

@@ -27,6 +27,10 @@ ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
 EXAMPLES = sorted((ROOT / "examples").glob("plot_*.py"))
 USER_GUIDE = ["conventions", "bla", "pnlss", "decoupling", "selection", "models", "command_line", "gap"]
+# Packages that are not part of the API (docs/api.rst, "Internals"): what the
+# estimators are made of, and the application behind ``python -m sklearn_pnlss``.
+INTERNAL = ["sklearn_pnlss.app", "sklearn_pnlss.decoupling", "sklearn_pnlss.frequency", "sklearn_pnlss.statespace",
+            "sklearn_pnlss.utils"]
 
 
 @pytest.fixture(scope="module")
@@ -69,11 +73,16 @@ def test_api_pages_document_the_estimators_methods(built_docs):
     assert 'class="math' in (html / "user_guide" / "bla.html").read_text()
 
 
+def _is_internal(name):
+    return any(name == pkg or name.startswith(f"{pkg}.") for pkg in INTERNAL)
+
+
 def _public_modules():
-    """Every importable module of the package without a private component."""
+    """Every importable module of the package without a private component,
+    outside the internal packages."""
     names = ["sklearn_pnlss"]
     for info in pkgutil.walk_packages(sklearn_pnlss.__path__, "sklearn_pnlss."):
-        if not any(part.startswith("_") for part in info.name.split(".")):
+        if not any(part.startswith("_") for part in info.name.split(".")) and not _is_internal(info.name):
             names.append(info.name)
     return names
 
@@ -111,6 +120,20 @@ def test_api_reference_covers_every_public_module():
         if name not in documented and any(id(getattr(module, item)) not in exported for item in public):
             missing.append(name)
     assert not missing, f"public modules missing from docs/api.rst: {missing}"
+
+
+def test_internal_packages_say_so_and_are_not_published():
+    """Each internal package's docstring says it may change without notice,
+    the API reference names it under "Internals" and publishes no page of
+    it."""
+    listed, _ = _documented_modules()
+    assert not [name for name in listed if _is_internal(name)]
+    api = (DOCS / "api.rst").read_text()
+    internals = api[api.index("\nInternals\n"):]
+    for name in INTERNAL:
+        assert f"``{name}``" in internals, name
+        doc = " ".join((importlib.import_module(name).__doc__ or "").split())
+        assert "may change without notice" in doc, name
 
 
 def test_readme_documents_the_docs_command():

@@ -10,7 +10,7 @@ import sys
 import numpy as np
 
 from sklearn_pnlss import DivergenceError
-from sklearn_pnlss.study import MODELS, format_table
+from sklearn_pnlss.app.study import MODELS, format_table
 
 
 def test_main_job_with_default_settings(tmp_path):
@@ -43,7 +43,7 @@ class _Diverging:
 
 
 def test_a_diverging_model_is_a_row_not_a_traceback():
-    from sklearn_pnlss.study import _score_row
+    from sklearn_pnlss.app.study import _score_row
 
     data = {"X_test_multisine": np.ones((1, 8, 1)), "y_test_multisine": np.full((1, 8, 1), 1e-5),
             "X_test_sweep": np.ones((1, 20, 1)), "y_test_sweep": np.ones((1, 20, 1))}

@@ -3,7 +3,8 @@ import json
 
 import pytest
 
-from sklearn_pnlss.study import format_table, main, run_study
+from sklearn_pnlss.app.cli import main
+from sklearn_pnlss.app.study import format_table, run_study
 
 
 def test_study_writes_results_and_figures(tmp_path):
@@ -76,3 +77,34 @@ def test_gap_demo_finds_the_missing_hysteresis(tmp_path, capsys):
     # the Bouc-Wen benchmark's alpha, recovered
     assert saved["ranking"][0]["params"]["alpha"] == pytest.approx(5e4, rel=0.01)
     assert (tmp_path / "gap_report.txt").exists()
+
+
+def test_the_library_never_imports_the_app():
+    """sklearn_pnlss.app is an application of the library: no library module
+    imports it, at the top or inside a function (only ``__main__``, the
+    ``python -m sklearn_pnlss`` shim, does)."""
+    import ast
+    from pathlib import Path
+
+    import sklearn_pnlss
+
+    root = Path(sklearn_pnlss.__file__).parent
+    offenders = []
+    for path in root.rglob("*.py"):
+        rel = path.relative_to(root)
+        if rel.parts[0] == "app" or rel == Path("__main__.py"):
+            continue
+        # The module's package, to resolve relative imports.
+        package = ["sklearn_pnlss", *rel.parent.parts]
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if isinstance(node, ast.Import):
+                names = [alias.name for alias in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                base = package[: len(package) - node.level + 1] if node.level else []
+                module = ".".join(base + ([node.module] if node.module else []))
+                names = [module] + [f"{module}.{alias.name}" for alias in node.names]
+            else:
+                continue
+            if any(name == "sklearn_pnlss.app" or name.startswith("sklearn_pnlss.app.") for name in names):
+                offenders.append(f"{rel}:{node.lineno}")
+    assert not offenders, offenders

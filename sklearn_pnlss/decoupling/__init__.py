@@ -10,6 +10,9 @@ The start of the decoupled model ``f(s) ~ W g(V^T s)``, in four steps:
    (:func:`rank_scan` helps choose ``r``);
 4. :func:`fit_branches` turns ``H`` into polynomial branches ``g_l`` of
    degrees 2..d (coefficients of shape (r, d), one per degree 1..d); :func:`decoupled_map` evaluates the result.
+
+Internal: not part of the API; may change without notice (the estimators in
+:mod:`sklearn_pnlss` are the way in).
 """
 from .branches import (
     branch_derivatives,

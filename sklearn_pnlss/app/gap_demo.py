@@ -1,5 +1,6 @@
-"""The main job's diagnosis demo: what a linear simulator of the Bouc-Wen
-benchmark structure misses (its hysteresis)."""
+"""The main job's diagnosis demo (``python -m sklearn_pnlss --gap-demo``):
+what a linear simulator of the Bouc-Wen benchmark structure misses (its
+hysteresis)."""
 import json
 import time
 from pathlib import Path
@@ -36,9 +37,9 @@ def run_gap_demo(out_dir=None, *, n_samples=2048, n_realizations=2, n_periods=2,
         Wall time of the diagnosis (fit and report).
     """
     from ..datasets import make_bouc_wen, simulate_bouc_wen
+    from ..gap import GapDiagnosis
     from ..physics import Oscillator
     from ..signals import swept_sine
-    from .diagnosis import GapDiagnosis
 
     data = make_bouc_wen(n_realizations=n_realizations + 1, n_periods=n_periods, n_samples=n_samples,
                          random_state=random_state, n_jobs=n_jobs)
