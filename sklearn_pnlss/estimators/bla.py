@@ -66,7 +66,7 @@ class BLAEstimator(SignalRegressorBase):
         The linear model.
     model_ : ScaledModel
         The same model as the nonlinear estimators' fitted model (a
-        :class:`~sklearn_pnlss.statespace.scaled.ScaledModel` around a
+        :class:`~sklearn_pnlss.ScaledModel` around a
         polynomial model without monomials, unit scales): it simulates
         (``model_.simulate(U, period)``) and exports itself
         (``model_.in_user_units()``).

@@ -102,13 +102,7 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
     A_, B_, C_, D_ : ndarray
         Linear part in the user's units.
     model_ : ScaledModel
-        The fitted model as one object
-        (:class:`~sklearn_pnlss.statespace.scaled.ScaledModel`): the model in
-        normalised units (``model_.normalised``, what Levenberg-Marquardt
-        fitted) with the input, output and state scales. It simulates in the
-        user's units (``model_.simulate(U, period)``) and gives itself in
-        them (``model_.in_user_units()``, from which the attributes below
-        are read).
+        The fitted model as one object (see :class:`PNLSSRegressor`).
     V_ : ndarray of shape (n_states + n_inputs, n_branches)
         Branch directions over ``[x; u]`` in the user's units.
     W_x_ : ndarray of shape (n_states, n_branches)

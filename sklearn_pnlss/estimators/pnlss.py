@@ -147,7 +147,7 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         Model matrices in the user's units.
     model_ : ScaledModel
         The fitted model as one object
-        (:class:`~sklearn_pnlss.statespace.scaled.ScaledModel`): the model in
+        (:class:`~sklearn_pnlss.ScaledModel`): the model in
         normalised units (``model_.normalised``, what Levenberg-Marquardt
         fitted) with the input, output and state scales. It simulates in the
         user's units (``model_.simulate(U, period)``) and gives itself in

@@ -1,5 +1,5 @@
 """The decoupled polynomial nonlinear state-space model."""
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -97,20 +97,15 @@ class DecoupledModel(StateSpaceModel):
         when ``output_branches``."""
         return self.Wx.size + self.V.size + self.G.size + (self.Wy.size if self.output_branches else 0)
 
-    def rescaled(self, state_scale, input_scale, output_scale):
-        """The same model in the units where ``x = state_scale * x_n``,
-        ``u = input_scale * u_n`` and ``y = output_scale * y_n`` (this
-        model's variables being ``x_n, u_n, y_n``): it simulates the same
-        signals, rescaled."""
-        T, Ti = np.diag(state_scale), np.diag(1 / state_scale)
-        Su_i, Sy = np.diag(1 / input_scale), np.diag(output_scale)
-        # z = V_n^T s_n = V_n^T S^-1 s: V absorbs the scaling, so the
-        # branches, and their trusted ranges, are unchanged.
+    def _rescaled_nonlinearity(self, state_scale, input_scale, output_scale):
+        """Wx, Wy, V for :meth:`rescaled`: z = V_n^T s_n = V_n^T S^-1 s, so V
+        absorbs the scaling and the branches, and their trusted ranges, are
+        unchanged."""
         S_i = 1 / np.concatenate([state_scale, input_scale])
-        return replace(
-            self, A=T @ self.A @ Ti, B=T @ self.B @ Su_i, C=Sy @ self.C @ Ti, D=Sy @ self.D @ Su_i,
-            Wx=T @ self.Wx, Wy=Sy @ self.Wy, V=S_i[:, None] * self.V, G=self.G.copy(), bounds=self.bounds.copy(),
-        )
+        return {
+            "Wx": np.diag(state_scale) @ self.Wx, "Wy": np.diag(output_scale) @ self.Wy,
+            "V": S_i[:, None] * self.V, "G": self.G.copy(), "bounds": self.bounds.copy(),
+        }
 
     @property
     def n_null_directions(self):

@@ -90,6 +90,18 @@ class StateSpaceModel:
             i += M.size
         return replace(self, **new)
 
+    def rescaled(self, state_scale, input_scale, output_scale):
+        """The same model in the units where ``x = state_scale * x_n``,
+        ``u = input_scale * u_n`` and ``y = output_scale * y_n`` (this
+        model's variables being ``x_n, u_n, y_n``): it simulates the same
+        signals, rescaled."""
+        T, Ti = np.diag(state_scale), np.diag(1 / state_scale)
+        Su_i, Sy = np.diag(1 / input_scale), np.diag(output_scale)
+        return replace(
+            self, A=T @ self.A @ Ti, B=T @ self.B @ Su_i, C=Sy @ self.C @ Ti, D=Sy @ self.D @ Su_i,
+            **self._rescaled_nonlinearity(state_scale, input_scale, output_scale),
+        )
+
     def _bounds(self):
         return np.ascontiguousarray(self.bounds[:, 0]), np.ascontiguousarray(self.bounds[:, 1])
 

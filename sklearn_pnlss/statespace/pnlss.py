@@ -55,21 +55,15 @@ class PNLSSModel(StateSpaceModel):
 
     with_trusted_range.__doc__ = StateSpaceModel.with_trusted_range.__doc__ + " The inputs stay unbounded."
 
-    def rescaled(self, state_scale, input_scale, output_scale):
-        """The same model in the units where ``x = state_scale * x_n``,
-        ``u = input_scale * u_n`` and ``y = output_scale * y_n`` (this
-        model's variables being ``x_n, u_n, y_n``): it simulates the same
-        signals, rescaled."""
-        T, Ti = np.diag(state_scale), np.diag(1 / state_scale)
-        Su_i, Sy = np.diag(1 / input_scale), np.diag(output_scale)
+    def _rescaled_nonlinearity(self, state_scale, input_scale, output_scale):
+        """E, F and bounds for :meth:`rescaled`."""
         var_scale = np.concatenate([state_scale, input_scale])
         # zeta(x_n, u_n)_j = zeta_j(x, u) / prod(scale ** exponent)
-        return PNLSSModel(
-            A=T @ self.A @ Ti, B=T @ self.B @ Su_i, C=Sy @ self.C @ Ti, D=Sy @ self.D @ Su_i,
-            E=T @ self.E / np.prod(var_scale**self.exE, axis=1),
-            F=Sy @ self.F / np.prod(var_scale**self.exF, axis=1),
-            exE=self.exE.copy(), exF=self.exF.copy(), bounds=self.bounds * var_scale[:, None],
-        )
+        return {
+            "E": np.diag(state_scale) @ self.E / np.prod(var_scale**self.exE, axis=1),
+            "F": np.diag(output_scale) @ self.F / np.prod(var_scale**self.exF, axis=1),
+            "bounds": self.bounds * var_scale[:, None],
+        }
 
     def bounded_variables(self, states_inputs):
         """The monomials' variables ``[x; u]`` themselves: what ``bounds``
