@@ -36,8 +36,8 @@ class SignalRegressorBase(RegressorMixin, BaseEstimator):
 
     def transform(self, X):
         """Pass the signals on to the next Pipeline stage, with this fitted
-        estimator attached as its start (see
-        :mod:`sklearn_pnlss.utils.handover`).
+        estimator attached as its start: the next stage's ``fit`` starts
+        from it (see the user guide's model selection page).
 
         Parameters
         ----------
