@@ -36,6 +36,8 @@ def test_layouts_round_trip():
         ([], "empty list"),
         ([np.zeros((5, 1)), np.zeros((5, 2))], "same number of channels"),
         (np.zeros((2, 2, 2, 2)), "4 dimensions"),
+        # (n_signals, n_samples) without the channel axis: say so.
+        (np.zeros((2, 300)), r"X\[\.\.\., None\] \(shape \(2, 300, 1\)\)"),
     ],
 )
 def test_bad_signals_raise_clear_errors(X, match):
@@ -59,3 +61,17 @@ def test_rms_error_in_metres_and_db():
     assert rms_error(y, yp, db=True) == pytest.approx(20 * np.log10(2e-5))
     with pytest.raises(ValueError, match="same number of signals"):
         rms_error(y, yp[:1])
+
+
+def test_transposed_signals_are_named_in_every_estimator():
+    """The commonest mistake, (n_signals, n_samples) without the channel
+    axis, gets the same hint from the estimators and the gap diagnosis."""
+    from sklearn_pnlss import BLAEstimator, PNLSSRegressor
+    from sklearn_pnlss.gap import GapDiagnosis
+
+    X = np.random.default_rng(0).standard_normal((2, 512))
+    for est in (BLAEstimator(2, period=256), PNLSSRegressor(2, period=256)):
+        with pytest.raises(ValueError, match=r"add the channel axis: X\[\.\.\., None\]"):
+            est.fit(X, X)
+    with pytest.raises(ValueError, match=r"\[\.\.\., None\]"):
+        GapDiagnosis(nominal=None, fs=1000.0).fit(X, X)

@@ -82,6 +82,17 @@ def _finite_2d(signal, name, index, min_samples):
             f"{where} contains NaN or infinity; remove or interpolate the "
             "bad samples before fitting or predicting."
         )
+    if 1 < arr.shape[0] < arr.shape[1]:
+        # The commonest mistake: n_signals single-channel signals as a 2-D
+        # (n_signals, n_samples) array, read as one signal with n_samples
+        # channels. No measurement has more channels than samples.
+        raise ValueError(
+            f"{where} has shape {arr.shape}, read as {arr.shape[0]} samples of {arr.shape[1]} "
+            "channels: a signal is (n_samples, n_channels). For "
+            f"{arr.shape[0]} single-channel signals of {arr.shape[1]} samples, add the channel "
+            f"axis: {name}[..., None] (shape {(arr.shape[0], arr.shape[1], 1)}); for one signal, "
+            f"transpose it ({name}.T)."
+        )
     if arr.shape[0] < min_samples:
         raise ValueError(
             f"{where} has {arr.shape[0]} sample(s); at least {min_samples} "
