@@ -68,10 +68,11 @@ def test_transposed_signals_are_named_in_every_estimator():
     axis, gets the same hint from the estimators and the gap diagnosis."""
     from sklearn_pnlss import BLAEstimator, PNLSSRegressor
     from sklearn_pnlss.gap import GapDiagnosis
+    from sklearn_pnlss.physics import Oscillator
 
     X = np.random.default_rng(0).standard_normal((2, 512))
     for est in (BLAEstimator(2, period=256), PNLSSRegressor(2, period=256)):
         with pytest.raises(ValueError, match=r"add the channel axis: X\[\.\.\., None\]"):
             est.fit(X, X)
     with pytest.raises(ValueError, match=r"\[\.\.\., None\]"):
-        GapDiagnosis(nominal=None, fs=1000.0).fit(X, X)
+        GapDiagnosis(nominal=Oscillator(mass=2.0, damping=10.0, stiffness=5e4), fs=750.0).fit(X, X)
