@@ -86,3 +86,14 @@ def test_memory_caches_the_earlier_stages_in_a_grid_search(tmp_path):
     # training set, not once per grid point.
     assert CountingBLA.fits == 3
     assert search.best_params_ == {"pnlss__max_iter": 5}
+
+
+def test_set_output_says_why_pandas_is_not_available():
+    from sklearn.pipeline import make_pipeline
+
+    from sklearn_pnlss import BLAEstimator, PNLSSRegressor
+
+    pipe = make_pipeline(BLAEstimator(2), PNLSSRegressor(2))
+    assert pipe.set_output(transform="default") is pipe
+    with pytest.raises(ValueError, match="no pandas form"):
+        pipe.set_output(transform="pandas")

@@ -51,6 +51,33 @@ class SignalRegressorBase(RegressorMixin, BaseEstimator):
         validate_signals(self, X, reset=False, min_samples=1)
         return attach_stage(X, self)
 
+    def set_output(self, *, transform=None):
+        """scikit-learn's output configuration, for Pipelines that set it.
+
+        ``transform`` hands signals on to the next stage unchanged (3-D
+        arrays or lists of signals), which have no DataFrame form: only the
+        default output is available.
+
+        Parameters
+        ----------
+        transform : {"default"} or None, default=None
+            None or "default" keep the output as it is. "pandas" and
+            "polars" raise a ValueError that says why.
+
+        Returns
+        -------
+        self
+        """
+        if transform not in (None, "default"):
+            raise ValueError(
+                f"{type(self).__name__}.set_output(transform={transform!r}): transform passes "
+                "the signals on to the next Pipeline stage unchanged, as (n_signals, "
+                "n_samples, n_channels) arrays or lists of signals, which have no "
+                f"{transform} form. Leave the output at its default, and convert the "
+                "predictions yourself (e.g. pandas.DataFrame(y_pred[i]) for signal i)."
+            )
+        return self
+
     def fit_transform(self, X, y, **fit_params):
         """:meth:`fit`, then :meth:`transform` (the Pipeline hand-over)."""
         return self.fit(X, y, **fit_params).transform(X)
