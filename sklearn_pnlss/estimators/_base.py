@@ -82,8 +82,13 @@ class SignalRegressorBase(RegressorMixin, BaseEstimator):
         """:meth:`fit`, then :meth:`transform` (the Pipeline hand-over)."""
         return self.fit(X, y, **fit_params).transform(X)
 
+    def _period(self):
+        """The period the model simulates with: ``period_`` once fitted (it
+        may come from the Pipeline stage before), else ``period``."""
+        return self.period_ if hasattr(self, "period_") else getattr(self, "period", None)
+
     def _signal_is_periodic(self, n_samples):
-        return is_periodic(n_samples, getattr(self, "period", None))
+        return is_periodic(n_samples, self._period())
 
     def predict(self, X):
         """Simulate the model (output error, not one-step-ahead prediction).

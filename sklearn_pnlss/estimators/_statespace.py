@@ -77,6 +77,7 @@ class StateSpaceRegressorBase(SignalRegressorBase):
         """
         X, stage = detach_stage(X)
         X_list, y_list = self._validate_fit_data(X, y)
+        self.period_ = self._handed_period(stage)
         settings = self._fit_settings()
         weights = self._check_time_weight(time_weight, y_list)
         val = self._check_validation(X_val, y_val)
@@ -88,9 +89,22 @@ class StateSpaceRegressorBase(SignalRegressorBase):
         self.n_nonlinear_params_ = self.model_.normalised.n_nonlinear_params
         return self
 
+    def _handed_period(self, stage):
+        """``period``, or, when it is None, the period of the Pipeline stage
+        this estimator starts from (periodic data stay periodic down the
+        Pipeline, as ``fs`` does)."""
+        own = check_period(self.period)
+        handed = None if stage is None else getattr(stage, "period_", stage.get_params().get("period"))
+        if own is not None and handed is not None and own != handed:
+            raise ValueError(
+                f"period={own} but the Pipeline stage before, {type(stage).__name__}, has "
+                f"period={handed}; give both the same period (or leave this one None)."
+            )
+        return own if own is not None else handed
+
     def _fit_settings(self):
         return FitSettings(
-            period=check_period(self.period), average_periods=self.average_periods, weighting=self.weighting,
+            period=self.period_, average_periods=self.average_periods, weighting=self.weighting,
             band=self.band, max_iter=self.max_iter, tol=self.tol, n_transient=self.n_transient,
             extrapolation=self.extrapolation, range_margin=self.range_margin, verbose=self.verbose,
             n_threads=self._segment_threads(),
@@ -151,7 +165,7 @@ class StateSpaceRegressorBase(SignalRegressorBase):
 
     def _predict_signal(self, U, periodic):
         try:
-            return self.model_.simulate(U, self.period if periodic else None)
+            return self.model_.simulate(U, self.period_ if periodic else None)
         except DivergenceError as exc:
             raise DivergenceError(
                 f"{type(self).__name__}.predict: {exc}; the input X drives the model far "
@@ -197,7 +211,7 @@ class StateSpaceRegressorBase(SignalRegressorBase):
         check_is_fitted(self)
         X_list, _, _ = validate_signals(self, X, reset=False, min_samples=1)
         return np.array([
-            self.model_.range_excursion(U, self.period if self._signal_is_periodic(U.shape[0]) else None)
+            self.model_.range_excursion(U, self.period_ if self._signal_is_periodic(U.shape[0]) else None)
             for U in X_list
         ])
 

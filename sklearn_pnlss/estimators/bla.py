@@ -2,13 +2,12 @@
 from numbers import Integral, Real
 
 import numpy as np
-from sklearn.base import _fit_context
-from sklearn.utils._param_validation import Interval
 
 from ..frequency.bla import periodic_bla, welch_bla
 from ..statespace.linear import frequency_response, modal_parameters, simulate_linear_signal
 from ..statespace.scaled import linear_scaled_model
 from ..statespace.subspace import fd_refine, fd_subspace
+from ..utils.parameters import Interval, validates_parameters
 from ..utils.validation import check_period
 from ._base import SignalRegressorBase
 
@@ -146,7 +145,7 @@ class BLAEstimator(SignalRegressorBase):
         self.n_block_rows = n_block_rows
         self.nperseg = nperseg
 
-    @_fit_context(prefer_skip_nested_validation=True)
+    @validates_parameters
     def fit(self, X, y):
         """Estimate the BLA and its linear state-space model.
 

@@ -16,7 +16,7 @@ from ..inspection import lm_fit_figures
 from ..statespace.fitting import optimise
 from ..statespace.model_base import DivergenceError
 from ..utils.handover import attach_stage
-from ..utils.validation import check_period, restore_layout, validate_signals
+from ..utils.validation import restore_layout, validate_signals
 from ._statespace import FIT_PARAMETER_CONSTRAINTS, StateSpaceRegressorBase
 from .bla import BLAEstimator
 from .pnlss import PNLSSRegressor
@@ -57,7 +57,8 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         term is redundant with A and B and kept only to count parameters as
         the paper does).
     period : int or None, default=None
-        Samples per period (see :class:`PNLSSRegressor`).
+        Samples per period; None: the period of the Pipeline stage this
+        model starts from, if any (see :class:`PNLSSRegressor`).
     n_init : int, default=5
         Starts from different random sampling points (and CPD starts).
     n_points : int, default=500
@@ -127,6 +128,8 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
     n_params_, n_nonlinear_params_, n_iter_, best_iteration_ : int
     cost_history_, validation_history_ : ndarray
         Of the kept start (see :class:`PNLSSRegressor`).
+    period_ : int or None
+        The period used (see :class:`PNLSSRegressor`).
     n_features_in_, n_outputs_ : int
 
     Examples
@@ -222,7 +225,7 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         by ``model`` (a ScaledModel), in periodic steady state, or from rest
         when the steady-state iteration diverges."""
         U_list = [model.normalise_inputs(U) for U in X_list]
-        for per in dict.fromkeys((check_period(self.period), None)):
+        for per in dict.fromkeys((self.period_, None)):
             try:
                 return model.normalised.trajectory(U_list, per)
             except DivergenceError:
@@ -247,7 +250,7 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
             else:
                 start = PNLSSRegressor(
                     self.n_states, degrees=(2, 3), variables="states_inputs",
-                    equations="both" if self.output_branches else "state", period=self.period,
+                    equations="both" if self.output_branches else "state", period=self.period_,
                 )
             X_fit = X_list if stage is None else attach_stage(X_list, stage)
             X_val, y_val = val if val is not None else (None, None)
@@ -321,7 +324,7 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         X_list, _, layout = validate_signals(self, X, reset=False, min_samples=1)
         out = []
         for U in X_list:
-            period = self.period if self._signal_is_periodic(U.shape[0]) else None
+            period = self.period_ if self._signal_is_periodic(U.shape[0]) else None
             model = self.model_.normalised
             try:
                 s = model.states_inputs(self.model_.normalise_inputs(U), period)

@@ -13,7 +13,6 @@ from ..statespace.degree_growth import degree_stages, optimise_growing_degrees
 from ..statespace.model_base import DivergenceError
 from ..statespace.pnlss import PNLSSModel
 from ..statespace.scaled import ScaledModel, unit_rms_scales
-from ..utils.validation import check_period
 from ._statespace import FIT_PARAMETER_CONSTRAINTS, StateSpaceRegressorBase
 from .bla import BLAEstimator
 
@@ -49,7 +48,9 @@ class PNLSSRegressor(StateSpaceRegressorBase):
     equations : {"state", "output", "both"}, default="state"
         Equations that carry the nonlinear terms.
     period : int or None, default=None
-        Samples per period. Periodic training signals (length a multiple of
+        Samples per period; None: the period of the Pipeline stage this
+        model starts from (a ``BLAEstimator(period=P)`` before it), if any,
+        else no period (``period_`` holds the one used). Periodic training signals (length a multiple of
         ``period``) are steady state: the end of their last period is
         prepended as a transient, so no sample is lost. Other signals are
         simulated from rest: the measurement is taken to start from rest, as
@@ -178,6 +179,9 @@ class PNLSSRegressor(StateSpaceRegressorBase):
     degree_stages_ : list of tuple of int
         The degrees of each stage: one stage with all degrees, or one more
         degree per stage when they grow.
+    period_ : int or None
+        The period used: ``period``, or the one handed over by the Pipeline
+        stage before.
     n_features_in_, n_outputs_ : int
 
     Examples
@@ -260,7 +264,7 @@ class PNLSSRegressor(StateSpaceRegressorBase):
     def _fit_start(self, stage, X_list, y_list, val, weights):
         """The linear start (the BLA, fitted here or handed over), normalised,
         with every monomial's coefficient zero."""
-        self.linear_model_ = self._linear_start(stage, X_list, y_list, check_period(self.period))
+        self.linear_model_ = self._linear_start(stage, X_list, y_list, self.period_)
         return self._normalised_start(X_list, y_list)
 
     def _fit_from_start(self, start, objectives, settings, val, X_list):
@@ -312,7 +316,7 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         # Output the states themselves (C = I, D = 0) to measure their rms.
         states = [
             simulate_linear_signal(A, B, np.eye(n), np.zeros((n, m)), U,
-                                   periodic_with=self.period if self._signal_is_periodic(U.shape[0]) else None)
+                                   periodic_with=self.period_ if self._signal_is_periodic(U.shape[0]) else None)
             for U in X_list
         ]
         u_scale, y_scale, x_scale = unit_rms_scales(X_list), unit_rms_scales(y_list), unit_rms_scales(states)
