@@ -13,6 +13,7 @@ from .decoupling.cpd import rank_scan
 from .decoupling.jacobian_tensor import sample_points
 from .decoupling.start import nonlinear_jacobian_tensor
 from .metrics import rms_error
+from .utils.handover import HeldOutSignalList
 from .utils.validation import as_signal_list, validate_signals
 
 __all__ = ["cpd_rank_scan", "held_out_signals", "mean_rms_db_scorer", "n_nonlinear_params_scorer"]
@@ -29,12 +30,13 @@ def held_out_signals(X_train, y_train, X_test, y_test):
     Returns
     -------
     X, y : list of ndarray
-        Training signals first, then test signals.
+        Training signals first, then test signals. The lists know which
+        signals are for training: an estimator of the library given all of
+        them fits the training signals only, so ``GridSearchCV(...,
+        cv=cv)`` with its default ``refit=True`` refits the best candidate
+        on ``X_train, y_train`` and never on the test signals.
     cv : list of one (train_indices, test_indices) pair
-        For ``GridSearchCV(..., cv=cv, refit=False)``: GridSearchCV refits
-        on every signal it was given, test signals included, so refit the
-        best parameters on the training signals yourself
-        (``clone(est).set_params(**search.best_params_).fit(X_train, y_train)``).
+        For ``GridSearchCV(..., cv=cv)``.
 
     Examples
     --------
@@ -52,7 +54,7 @@ def held_out_signals(X_train, y_train, X_test, y_test):
         raise ValueError("X_train/y_train and X_test/y_test must hold as many input as output signals.")
     train = np.arange(len(Xa))
     test = np.arange(len(Xa), len(Xa) + len(Xb))
-    return Xa + Xb, ya + yb, [(train, test)]
+    return HeldOutSignalList(Xa + Xb, train), HeldOutSignalList(ya + yb, train), [(train, test)]
 
 
 def mean_rms_db_scorer(estimator, X, y):

@@ -61,3 +61,25 @@ def test_grid_search_on_a_dask_cluster():
     assert search.best_params_ == reference.best_params_
     np.testing.assert_allclose(search.cv_results_["mean_test_score"],
                                reference.cv_results_["mean_test_score"], rtol=1e-10)
+
+
+def test_refit_after_a_held_out_search_trains_on_the_training_signals_only():
+    """GridSearchCV's default refit=True refits on every signal it was
+    given; the held-out lists make that the training signals (the sweep,
+    not whole periods, used to fail the refit after the whole search)."""
+    from sklearn.base import clone
+    from sklearn.pipeline import make_pipeline
+
+    from sklearn_pnlss import BLAEstimator
+
+    X, y, cv = _train_test()
+    pipe = make_pipeline(BLAEstimator(2, period=N), PNLSSRegressor(2, variables="states", max_iter=20))
+    search = GridSearchCV(pipe, {"pnlssregressor__degrees": [(2,), (2, 3)]}, cv=cv,
+                          scoring=mean_rms_db_scorer).fit(X, y)
+    assert search.best_params_ == {"pnlssregressor__degrees": (2, 3)}
+    manual = clone(pipe).set_params(**search.best_params_).fit(X[:3], y[:3])
+    X_test = X[3:]
+    for a, b in zip(search.predict(X_test), manual.predict(X_test)):
+        np.testing.assert_array_equal(a, b)
+    # The refitted model scores on the test signals what the search measured.
+    assert mean_rms_db_scorer(search.best_estimator_, X_test, y[3:]) == pytest.approx(search.best_score_, abs=1e-9)

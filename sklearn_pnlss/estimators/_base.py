@@ -8,7 +8,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from ..inspection import linear_statespace, lm_fit_figures, summarize
 from ..metrics import rms_error
-from ..utils.handover import attach_stage
+from ..utils.handover import attach_stage, training_signals
 from ..utils.validation import is_periodic, restore_layout, signal_layout, validate_signals
 
 __all__ = ["SignalRegressorBase"]
@@ -28,6 +28,7 @@ class SignalRegressorBase(RegressorMixin, BaseEstimator):
             raise ValueError(
                 f"{type(self).__name__} requires y to be passed, but the target y is None."
             )
+        X, y = training_signals(X, y)
         X_list, y_list, _ = validate_signals(self, X, y, reset=True)
         # A 1-D y given with one signal asks for 1-D predictions back.
         self._y_was_1d = signal_layout(y).kind == "1d"
