@@ -109,7 +109,7 @@ def _is_bool(value):
 
 
 def _article(words):
-    return ("an " if words[:1].lower() in "aeiou" else "a ") + words
+    return ("an " if words[:1].lower() in ("a", "e", "i", "o", "u") else "a ") + words
 
 
 class _Constraint:
