@@ -1,9 +1,27 @@
-"""Error measures used across the field: rms simulation error in m and dB."""
+"""Error measures used across the field, and scorers that apply any metric
+over whole signals.
+
+scikit-learn's string scorers (``scoring="r2"``) call their metric on the
+signals as they are, 3-D arrays, which its metrics refuse: the search then
+records NaN with a warning. :func:`signal_scorer` gives the same scorers by
+name, applied over whole signals (all samples of all signals pooled, one
+column per output), and :func:`make_signal_scorer` wraps any metric
+function the same way.
+"""
 import numpy as np
 
 from .utils.validation import as_signal_list
 
-__all__ = ["rms_error", "rms_db_scorer", "to_db"]
+__all__ = [
+    "fit_percent",
+    "make_signal_scorer",
+    "max_error",
+    "nrmse",
+    "rms_db_scorer",
+    "rms_error",
+    "signal_scorer",
+    "to_db",
+]
 
 
 def to_db(value):
@@ -36,20 +54,169 @@ def rms_error(y_true, y_pred, db=False):
     >>> rms_error(np.zeros(4), np.full(4, 1e-3), db=True)
     -60.0
     """
+    true, pred = _pooled(y_true, y_pred)
+    value = np.sqrt(np.mean((true - pred) ** 2))
+    return float(to_db(value)) if db else float(value)
+
+
+def _pooled(y_true, y_pred):
+    """All samples of all signals, (n_total_samples, n_outputs), of both."""
     true, _ = as_signal_list(y_true, name="y_true", min_samples=1)
     pred, _ = as_signal_list(y_pred, name="y_pred", min_samples=1)
-    if len(true) != len(pred) or any(
-        a.shape != b.shape for a, b in zip(true, pred)
-    ):
+    if len(true) != len(pred) or any(a.shape != b.shape for a, b in zip(true, pred)):
         raise ValueError(
             "y_true and y_pred must hold the same number of signals with the "
             f"same shapes; got {[a.shape for a in true]} and "
             f"{[b.shape for b in pred]}."
         )
-    sq = sum(float(np.sum((a - b) ** 2)) for a, b in zip(true, pred))
-    n = sum(a.size for a in true)
-    value = np.sqrt(sq / n)
-    return float(to_db(value)) if db else float(value)
+    return np.concatenate(true), np.concatenate(pred)
+
+
+def nrmse(y_true, y_pred):
+    """Normalised rms error: ``||y - y_hat|| / ||y - mean(y)||`` per output
+    over all signals, averaged over the outputs (0 is perfect, 1 is no
+    better than the mean; MATLAB's ``goodnessOfFit(..., "NRMSE")``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> y = np.array([1.0, -1.0, 1.0, -1.0])
+    >>> round(nrmse(y, 0.9 * y), 12)
+    0.1
+    """
+    true, pred = _pooled(y_true, y_pred)
+    spread = np.linalg.norm(true - true.mean(axis=0), axis=0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return float(np.mean(np.linalg.norm(true - pred, axis=0) / spread))
+
+
+def fit_percent(y_true, y_pred):
+    """The "fit" of MATLAB's ``compare``: ``100 (1 - NRMSE)`` in percent
+    (100 is perfect, 0 no better than the mean, negative worse).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> y = np.array([1.0, -1.0, 1.0, -1.0])
+    >>> round(fit_percent(y, 0.9 * y), 6)
+    90.0
+    """
+    return 100.0 * (1.0 - nrmse(y_true, y_pred))
+
+
+def max_error(y_true, y_pred):
+    """Largest absolute simulation error over all signals, samples and
+    outputs (in the units of y).
+
+    Examples
+    --------
+    >>> max_error([0.0, 1.0, 2.0], [0.0, 1.5, 1.9])
+    0.5
+    """
+    true, pred = _pooled(y_true, y_pred)
+    return float(np.max(np.abs(true - pred)))
+
+
+class _SignalScorer:
+    """``sign * metric(y, estimator.predict(X))`` over pooled signals."""
+
+    def __init__(self, metric, sign, name, kwargs):
+        self.metric, self.sign, self.name, self.kwargs = metric, sign, name, kwargs
+
+    def __call__(self, estimator, X, y, sample_weight=None):
+        if sample_weight is not None:
+            raise ValueError("sample_weight is not supported by signal scorers; pass None.")
+        true, pred = _pooled(y, estimator.predict(X))
+        return self.sign * float(self.metric(true, pred, **self.kwargs))
+
+    def __repr__(self):
+        return f"signal_scorer({self.name!r})" if self.name else f"make_signal_scorer({self.metric.__name__})"
+
+
+def make_signal_scorer(metric, *, greater_is_better=True, **kwargs):
+    """A scorer for ``GridSearchCV`` / ``cross_val_score`` that applies a
+    metric over whole signals.
+
+    The predictions and the true outputs of all held-out signals are pooled
+    into two arrays of shape (n_total_samples, n_outputs), the form every
+    scikit-learn regression metric takes, and ``metric(y_true, y_pred,
+    **kwargs)`` is applied to them.
+
+    Parameters
+    ----------
+    metric : callable
+        ``metric(y_true, y_pred, **kwargs) -> float``, e.g.
+        :func:`sklearn.metrics.r2_score` or :func:`nrmse`.
+    greater_is_better : bool, default=True
+        False for an error (the scorer then returns minus the metric, as
+        scikit-learn's ``neg_*`` scorers do).
+    **kwargs
+        Passed on to ``metric``.
+
+    Returns
+    -------
+    scorer : callable ``(estimator, X, y) -> float``
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from types import SimpleNamespace
+    >>> from sklearn.metrics import mean_absolute_error
+    >>> X = np.ones((2, 4, 1))
+    >>> model = SimpleNamespace(predict=lambda X: 0.5 * X)   # stands for a fitted estimator
+    >>> make_signal_scorer(mean_absolute_error, greater_is_better=False)(model, X, X)
+    -0.5
+    """
+    return _SignalScorer(metric, 1.0 if greater_is_better else -1.0, None, kwargs)
+
+
+def _scorers():
+    from sklearn import metrics as skm
+
+    return {
+        "r2": (skm.r2_score, 1.0),
+        "explained_variance": (skm.explained_variance_score, 1.0),
+        "neg_mean_squared_error": (skm.mean_squared_error, -1.0),
+        "neg_root_mean_squared_error": (lambda t, p: np.sqrt(skm.mean_squared_error(t, p)), -1.0),
+        "neg_mean_absolute_error": (skm.mean_absolute_error, -1.0),
+        "neg_max_error": (lambda t, p: max_error(t, p), -1.0),
+        "neg_nrmse": (nrmse, -1.0),
+        "fit_percent": (fit_percent, 1.0),
+        "neg_rms_db": (lambda t, p: rms_error(t, p, db=True), -1.0),
+    }
+
+
+def signal_scorer(name):
+    """scikit-learn's scorer ``name``, applied over whole signals.
+
+    For ``scoring=signal_scorer("r2")`` where scikit-learn habits would
+    write ``scoring="r2"`` (which gives NaN on signals: see the module
+    docstring).
+
+    Parameters
+    ----------
+    name : str
+        One of "r2", "explained_variance", "neg_mean_squared_error",
+        "neg_root_mean_squared_error", "neg_mean_absolute_error",
+        "neg_max_error" (scikit-learn's names), and the field's
+        "fit_percent" (MATLAB's ``compare``), "neg_nrmse" and "neg_rms_db"
+        (minus the rms error in dB, as :func:`rms_db_scorer`). Higher is
+        better for all.
+
+    Returns
+    -------
+    scorer : callable ``(estimator, X, y) -> float``
+
+    Examples
+    --------
+    >>> signal_scorer("r2")
+    signal_scorer('r2')
+    """
+    table = _scorers()
+    if name not in table:
+        raise ValueError(f"Unknown signal scorer {name!r}; choose one of {sorted(table)}.")
+    metric, sign = table[name]
+    return _SignalScorer(metric, sign, name, {})
 
 
 def rms_db_scorer(estimator, X, y):
