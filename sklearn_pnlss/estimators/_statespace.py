@@ -8,13 +8,12 @@ import warnings
 from numbers import Integral, Real
 
 import numpy as np
-from sklearn.base import _fit_context
-from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
 
 from ..statespace.fitting import FitSettings, simulation_objectives
 from ..statespace.model_base import DivergenceError
 from ..utils.handover import detach_stage
+from ..utils.parameters import Interval, Options, validates_parameters
 from ..utils.validation import as_signal_list, check_period, validate_signals
 from ._base import SignalRegressorBase
 
@@ -25,11 +24,11 @@ FIT_PARAMETER_CONSTRAINTS = {
     "range_margin": [Interval(Real, 0, None, closed="left")],
     "period": [Interval(Integral, 2, None, closed="left"), None],
     "average_periods": ["boolean"],
-    "weighting": [None, StrOptions({"band", "noise"})],
+    "weighting": [None, Options(str, {"band", "noise"})],
     "band": [tuple, list, None],
     "max_iter": [Interval(Integral, 0, None, closed="left")],
     "tol": [Interval(Real, 0, None, closed="left")],
-    "n_transient": [Interval(Integral, 0, None, closed="left"), StrOptions({"auto"})],
+    "n_transient": [Interval(Integral, 0, None, closed="left"), Options(str, {"auto"})],
     "verbose": ["verbose"],
     "random_state": ["random_state"],
 }
@@ -49,7 +48,7 @@ class StateSpaceRegressorBase(SignalRegressorBase):
     ``range_margin`` and ``verbose``.
     """
 
-    @_fit_context(prefer_skip_nested_validation=False)
+    @validates_parameters
     def fit(self, X, y, *, X_val=None, y_val=None, time_weight=None):
         """Fit the start model, then the full model by Levenberg-Marquardt.
 

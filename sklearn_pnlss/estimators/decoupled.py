@@ -7,7 +7,6 @@ import numpy as np
 from joblib import Parallel, delayed
 from sklearn.base import clone
 from sklearn.utils import check_random_state
-from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
 
 from ..decoupling.branches import evaluate_branches
@@ -16,6 +15,7 @@ from ..inspection import lm_fit_figures
 from ..statespace.fitting import optimise
 from ..statespace.model_base import DivergenceError
 from ..utils.handover import attach_stage
+from ..utils.parameters import Interval, Options
 from ..utils.validation import restore_layout, validate_signals
 from ._statespace import FIT_PARAMETER_CONSTRAINTS, StateSpaceRegressorBase
 from .bla import BLAEstimator
@@ -148,7 +148,7 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         "n_points": [Interval(Integral, 2, None, closed="left")],
         "output_branches": ["boolean"],
         "start_model": [None, PNLSSRegressor],
-        "extrapolation": [StrOptions({"hold", "linear", "polynomial"})],
+        "extrapolation": [Options(str, {"hold", "linear", "polynomial"})],
         "n_jobs": [Integral, None],
     }
 

@@ -5,7 +5,6 @@ from numbers import Integral
 import numpy as np
 from joblib import effective_n_jobs
 from sklearn.base import clone
-from sklearn.utils._param_validation import Interval, StrOptions
 
 from ..statespace.linear import is_stable, simulate_linear_signal
 from ..statespace.monomials import monomial_exponents
@@ -13,6 +12,7 @@ from ..statespace.degree_growth import degree_stages, optimise_growing_degrees
 from ..statespace.model_base import DivergenceError
 from ..statespace.pnlss import PNLSSModel
 from ..statespace.scaled import ScaledModel, unit_rms_scales
+from ..utils.parameters import Interval, Options
 from ._statespace import FIT_PARAMETER_CONSTRAINTS, StateSpaceRegressorBase
 from .bla import BLAEstimator
 
@@ -195,10 +195,10 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         **FIT_PARAMETER_CONSTRAINTS,
         "n_states": [Interval(Integral, 1, None, closed="left")],
         "degrees": ["array-like"],
-        "variables": [StrOptions({"states_inputs", "states"})],
-        "equations": [StrOptions({"state", "output", "both"})],
-        "grow_degrees": ["boolean", StrOptions({"auto"})],
-        "extrapolation": [StrOptions({"hold", "polynomial"})],
+        "variables": [Options(str, {"states_inputs", "states"})],
+        "equations": [Options(str, {"state", "output", "both"})],
+        "grow_degrees": ["boolean", Options(str, {"auto"})],
+        "extrapolation": [Options(str, {"hold", "polynomial"})],
         "linear_model": [None, BLAEstimator],
         "n_jobs": [Integral, None],
     }

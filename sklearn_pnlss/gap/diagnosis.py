@@ -5,11 +5,11 @@ from numbers import Integral, Real
 
 import numpy as np
 from joblib import Parallel, delayed
-from sklearn.base import BaseEstimator, _fit_context
-from sklearn.utils._param_validation import Interval
+from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
 from ..physics.oscillator import Oscillator
+from ..utils.parameters import Interval, validates_parameters
 from ..utils.validation import as_signal_list, check_period
 from .black_box import branch_opinions, fit_black_box
 from .calibrate import effect_model, fit_effect, meaningful_ftol, with_recalibration
@@ -198,7 +198,7 @@ class GapDiagnosis(BaseEstimator):
         if self.verbose:
             print(f"[GapDiagnosis] {text}", flush=True)
 
-    @_fit_context(prefer_skip_nested_validation=True)
+    @validates_parameters
     def fit(self, X, y):
         """Fit every candidate effect (and the black box) to training signals.
 
