@@ -144,3 +144,20 @@ def test_growing_degrees_carries_each_stage_over():
     grown = with_degrees(start.normalised, (2, 3), low)
     degree = grown.exE.sum(axis=1)
     assert np.all(grown.E[:, degree == 2] == 1.0) and np.all(grown.E[:, degree == 3] == 0.0)
+
+
+def test_iteration_listener_hears_every_iteration():
+    from sklearn_pnlss.statespace.fitting import iteration_listener
+
+    X, y = _signals(0)
+    settings = FitSettings(period=PERIOD, max_iter=5, tol=0.0, extrapolation="polynomial")
+    start = _linear_start()
+    heard = []
+    with iteration_listener(lambda it, cost_db: heard.append((it, cost_db))):
+        fit = optimise(start, simulation_objectives(start, X, y, settings), settings)
+    assert [it for it, _ in heard] == list(range(fit.n_iter + 1))
+    # The costs heard are the cost history's, in dB of the rms error.
+    n_res = sum(Y.size for Y in y) // 2  # periods averaged
+    np.testing.assert_allclose([c for _, c in heard], 10 * np.log10(fit.cost_history / n_res), rtol=1e-12)
+    optimise(start, simulation_objectives(start, X, y, settings), settings)
+    assert len(heard) == fit.n_iter + 1  # nothing heard outside the block

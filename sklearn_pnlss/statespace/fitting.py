@@ -15,6 +15,7 @@ the training segments, widened by ``range_margin``), continued outside it as
 ``extrapolation`` says; inside the range nothing changes. The training data
 lie inside that range by construction, so the fit itself is unchanged.
 """
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -27,13 +28,33 @@ from .model_base import DivergenceError
 from .objective import SimulationError
 from .segments import make_segments, transient_length
 
-__all__ = ["AMPLIFIED_VALIDATION", "FitSettings", "LMFit", "optimise", "simulation_objectives", "trusted_model"]
+__all__ = [
+    "AMPLIFIED_VALIDATION", "FitSettings", "LMFit", "iteration_listener", "optimise", "simulation_objectives",
+    "trusted_model",
+]
 
 # An iterate (or a start) that runs away (diverges, or leaves its trusted
 # range by more than its width) on the validation inputs amplified by this
 # factor counts as failed: a returned model must stay sane somewhat above the
 # level it was validated at.
 AMPLIFIED_VALIDATION = 1.2
+
+
+# Callbacks told of every Levenberg-Marquardt iteration (see iteration_listener).
+_LISTENERS = []
+
+
+@contextmanager
+def iteration_listener(callback):
+    """Within the block, ``callback(iteration, cost_db)`` is called after
+    every Levenberg-Marquardt iteration of every fit (all threads): how an
+    application shows progress inside long fits. ``cost_db`` is the rms of
+    the weighted normalised error in dB."""
+    _LISTENERS.append(callback)
+    try:
+        yield
+    finally:
+        _LISTENERS.remove(callback)
 
 
 @dataclass(frozen=True)
@@ -219,8 +240,11 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
         val_history.append(v)
         if v < best["err"]:
             best.update(err=v, theta=theta.copy(), it=done + it)
+        cost_db = 10 * np.log10(cost / n_res)
+        for listener in tuple(_LISTENERS):
+            listener(done + it, cost_db)
         if settings.verbose:
-            msg = f"iteration {done + it:4d}  cost {10 * np.log10(cost / n_res):8.2f} dB  lambda {lam:9.3g}"
+            msg = f"iteration {done + it:4d}  cost {cost_db:8.2f} dB  lambda {lam:9.3g}"
             print(msg + (f"  validation {v:8.2f} dB" if validation is not None else ""), flush=True)
 
     theta = model.theta
