@@ -16,6 +16,7 @@ import numpy as np
 
 from .. import DivergenceError
 from ..metrics import rms_error
+from ..statespace.fitting import iteration_listener
 
 __all__ = ["MODELS", "format_grid", "format_table", "run_study"]
 
@@ -24,21 +25,33 @@ MODELS = ("bla", "pnlss", "pnlss_si", "decoupled")
 
 
 class _Steps:
-    """Progress over the study's stages (tqdm when available)."""
+    """Progress over the study's stages (tqdm when available), with the
+    Levenberg-Marquardt iterations of the fit under way: the bar moves
+    inside long fits too, and stays on screen at the end."""
 
     def __init__(self, total, enabled):
         self._bar = None
+        self._listening = None
         if enabled:
             try:
                 from tqdm.auto import tqdm
 
-                self._bar = tqdm(total=total, unit="step", leave=False)
+                self._bar = tqdm(total=total, unit="step")
             except ImportError:  # pragma: no cover - tqdm is optional
                 self._bar = None
+        if self._bar is not None:
+            self._listening = iteration_listener(self._iteration)
+            self._listening.__enter__()
+
+    def _iteration(self, iteration, cost_db):
+        # Called from the fitting threads; tqdm's postfix is thread-safe
+        # enough for a status line.
+        self._bar.set_postfix_str(f"LM iteration {iteration}, cost {cost_db:.1f} dB", refresh=True)
 
     def start(self, text):
         if self._bar is not None:
             self._bar.set_description(text)
+            self._bar.set_postfix_str("")
         else:
             print(f"... {text}", flush=True)
 
@@ -47,7 +60,12 @@ class _Steps:
             self._bar.update(1)
 
     def close(self):
+        if self._listening is not None:
+            self._listening.__exit__(None, None, None)
+            self._listening = None
         if self._bar is not None:
+            self._bar.set_description("done")
+            self._bar.set_postfix_str("")
             self._bar.close()
 
 
