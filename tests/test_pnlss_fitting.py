@@ -128,8 +128,11 @@ def test_time_weight_and_frequency_weighting_are_exclusive():
     X, y = _data(truth)
     with pytest.raises(ValueError, match="time_weight"):
         PNLSSRegressor(3, period=N, weighting="band", max_iter=1).fit(X, y, time_weight=np.ones(y.shape))
-    with pytest.raises(ValueError, match="layout of y"):
+    # Without the channel axis: named, with the fix.
+    with pytest.raises(ValueError, match=r"time_weight\[\.\.\., None\]"):
         PNLSSRegressor(3, period=N, max_iter=1).fit(X, y, time_weight=np.ones(y.shape[:2]))
+    with pytest.raises(ValueError, match="layout of y"):
+        PNLSSRegressor(3, period=N, max_iter=1).fit(X, y, time_weight=np.ones((y.shape[0] - 1,) + y.shape[1:]))
     with pytest.raises(ValueError, match="X_val and y_val"):
         PNLSSRegressor(3, period=N, max_iter=1).fit(X, y, X_val=X)
     with pytest.raises(ValueError, match="band must be"):
