@@ -1,0 +1,158 @@
+"""The F-16 ground vibration test loader, on the measured files when present
+(``SKLEARN_PNLSS_F16_DATA``, or ``../data_f16`` next to the project) and on
+small synthetic files of the same layout otherwise."""
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sklearn_pnlss.datasets import load_f16
+
+_DEFAULT = Path(__file__).resolve().parents[2] / "data_f16"
+PERIOD = 8192
+
+
+def _f16_dir():
+    path = Path(os.environ.get("SKLEARN_PNLSS_F16_DATA", _DEFAULT))
+    for folder in (path, path / "BenchmarkData", path / "F16GVT_Files" / "BenchmarkData"):
+        if (folder / "F16Data_FullMSine_Level3.mat").exists():
+            return folder
+    return None
+
+
+@pytest.fixture(scope="module")
+def f16_dir():
+    path = _f16_dir()
+    if path is None:
+        pytest.skip("F-16 benchmark files not found (set SKLEARN_PNLSS_F16_DATA)")
+    return path
+
+
+@pytest.fixture(scope="module")
+def level3(f16_dir):
+    return load_f16(f16_dir, level=3)
+
+
+def _rms(x, axis=None):
+    return np.sqrt(np.mean(np.square(x), axis=axis))
+
+
+# -- without the measured files ------------------------------------------------
+
+def test_missing_folder_names_argument_and_variable(monkeypatch, tmp_path):
+    monkeypatch.delenv("SKLEARN_PNLSS_F16_DATA", raising=False)
+    with pytest.raises(FileNotFoundError, match=r"path=.*SKLEARN_PNLSS_F16_DATA"):
+        load_f16()
+    with pytest.raises(FileNotFoundError, match=r"F16Data_FullMSine_Level3\.mat.*SKLEARN_PNLSS_F16_DATA"):
+        load_f16(tmp_path)
+    monkeypatch.setenv("SKLEARN_PNLSS_F16_DATA", str(tmp_path))
+    with pytest.raises(FileNotFoundError, match=r"from \$SKLEARN_PNLSS_F16_DATA"):
+        load_f16()
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"kind": "chirp"}, "kind must be one of"),
+    ({"level": 8}, "level must be an int in 1..7"),
+    ({"kind": "special_odd", "level": 4}, "level must be an int in 1..3"),
+    ({"level": True}, "level must be an int"),
+])
+def test_bad_arguments(tmp_path, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        load_f16(tmp_path, **kwargs)
+
+
+def _write_mat(path, force, acc):
+    from scipy.io import savemat
+
+    savemat(path, {"Force": force, "Voltage": force / 100.0, "Acceleration": acc,
+                   "Fs": np.array([[400.0]])})
+
+
+def test_special_odd_layout_from_synthetic_files(tmp_path):
+    """Realisations in rows, three periods of 16384 samples, the first dropped;
+    the tenth realisation comes from the *_Validation file."""
+    rng = np.random.RandomState(0)
+    n = 3 * 16384
+    force = rng.randn(9, n)
+    acc = rng.randn(3, 9, n)
+    _write_mat(tmp_path / "F16Data_SpecialOddMSine_Level2.mat", force, acc)
+    _write_mat(tmp_path / "F16Data_SpecialOddMSine_Level2_Validation.mat", force[:1], acc[:, :1])
+    data = load_f16(tmp_path, kind="special_odd", level=2)
+    assert data.X.shape == (9, 2 * 16384, 1) and data.y.shape == (9, 2 * 16384, 3)
+    assert data.X_raw.shape == (9, n, 1) and data.period == 16384
+    np.testing.assert_array_equal(data.X[4, :, 0], force[4, 16384:])
+    np.testing.assert_array_equal(data.y[4, :, 2], acc[2, 4, 16384:])
+    assert data.X_val.shape == (1, 2 * 16384, 1) and data.validation_level == 2
+    np.testing.assert_array_equal(data.voltage[..., 0], force[:, 16384:] / 100.0)
+
+
+def test_sweep_padding_removed_and_csv_read(tmp_path):
+    n = 1000
+    t = np.arange(n) / 400.0
+    force = np.sin(2 * np.pi * 5 * t)
+    force[900:] = 0.0
+    acc = np.stack([force, 0.5 * force, -force])
+    acc[1, 900:905] = 1e-3  # a channel that still rings after the force stops
+    header = '"Force","Voltage","Acceleration1","Acceleration2","Acceleration3","Fs",'
+    rows = [f"{f},{f / 100},{a1},{a2},{a3},400," for f, a1, a2, a3 in zip(force, *acc)]
+    (tmp_path / "F16Data_SineSw_Level3.csv").write_text("\n".join([header, *rows]) + "\n")
+    data = load_f16(tmp_path, kind="sinesweep", level=3, validation_level=None)
+    assert data.X.shape == (1, 905, 1) and data.y.shape == (1, 905, 3)
+    assert data.X_raw.shape == (1, n, 1) and data.period is None and data.lines is None
+    assert data.X_val is None and data.validation_level is None
+    np.testing.assert_allclose(data.y[0, :, 1], acc[1, :905])
+
+
+# -- measured files ------------------------------------------------------------
+
+def test_multisine_layout(level3):
+    d = level3
+    assert d.X.shape == (1, 8 * PERIOD, 1) and d.y.shape == (1, 8 * PERIOD, 3)
+    assert d.X_raw.shape == (1, 9 * PERIOD, 1) and d.y_raw.shape == (1, 9 * PERIOD, 3)
+    np.testing.assert_array_equal(d.X, d.X_raw[:, PERIOD:])
+    np.testing.assert_array_equal(d.y, d.y_raw[:, PERIOD:])
+    assert d.voltage.shape == d.X.shape
+    assert d.fs == 400.0 and d.period == PERIOD and d.level == 3 and d.kind == "multisine"
+    # test level of the benchmark's pairing, same layout
+    assert d.validation_level == 2
+    assert d.X_val.shape == (1, 8 * PERIOD, 1) and d.y_val.shape == (1, 8 * PERIOD, 3)
+    # nominal levels: 36.8 N rms (estimation), 24.6 N rms (test)
+    assert _rms(d.X) == pytest.approx(36.8, rel=0.01)
+    assert _rms(d.X_val) == pytest.approx(24.6, rel=0.01)
+    assert len(d.output_names) == 3 and "F-16" in d.DESCR
+
+
+def test_multisine_is_periodic_within_the_noise(level3):
+    """Periods 2-9 repeat to about 1 % of the output (measurement noise);
+    the dropped first period holds the transient, three to four times
+    further from the steady state."""
+    y = level3.y[0].reshape(8, PERIOD, 3)
+    steady = y.mean(axis=0)
+    spread = _rms(y - steady, axis=(0, 1)) / _rms(steady, axis=0)
+    assert np.all(spread > 0.005) and np.all(spread < 0.015), spread
+    first = level3.y_raw[0, :PERIOD]
+    transient = _rms(first - steady, axis=0) / _rms(steady, axis=0)
+    assert np.all(transient > 2.5 * spread), (transient, spread)
+    u = level3.X[0, :, 0].reshape(8, PERIOD)
+    assert _rms(u - u.mean(axis=0)) / _rms(u) < 0.002
+
+
+def test_sweep_layout(f16_dir):
+    d = load_f16(f16_dir, kind="sinesweep", level=3)
+    assert d.X_raw.shape == (1, 108477, 1) and d.y_raw.shape == (1, 108477, 3)
+    assert d.X.shape == (1, 107283, 1) and d.y.shape == (1, 107283, 3)
+    assert np.all(d.X_raw[0, 107283:] == 0) and np.all(d.y_raw[0, 107283:] == 0)
+    assert d.period is None and d.lines is None and d.fs == 400.0
+    assert d.validation_level == 2 and d.X_val.shape == (1, 107581, 1)
+    # the longer level-4 test sweep is not a whole number of multisine periods
+    d4 = load_f16(f16_dir, kind="sinesweep", level=4)
+    assert d4.X.shape == (1, 115968, 1) and d4.validation_level is None and d4.X_val is None
+
+
+def test_validation_level_argument(f16_dir):
+    d = load_f16(f16_dir, level=5, validation_level=6)
+    assert d.validation_level == 6 and _rms(d.X_val) == pytest.approx(85.7, rel=0.01)
+    assert load_f16(f16_dir, level=7, validation_level=None).X_val is None
+    with pytest.raises(ValueError, match="validation_level"):
+        load_f16(f16_dir, level=3, validation_level=9)
