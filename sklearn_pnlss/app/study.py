@@ -32,6 +32,7 @@ class _Steps:
     def __init__(self, total, enabled):
         self._bar = None
         self._listening = None
+        self._drawn = 0.0
         if enabled:
             try:
                 from tqdm.auto import tqdm
@@ -44,9 +45,13 @@ class _Steps:
             self._listening.__enter__()
 
     def _iteration(self, iteration, cost_db):
-        # Called from the fitting threads; tqdm's postfix is thread-safe
-        # enough for a status line.
-        self._bar.set_postfix_str(f"LM iteration {iteration}, cost {cost_db:.1f} dB", refresh=True)
+        # Called from the fitting threads (parallel starts interleave);
+        # redrawn at most twice a second, so that a log file does not fill
+        # with one line per iteration.
+        now = time.monotonic()
+        if now - self._drawn >= 0.5:
+            self._drawn = now
+            self._bar.set_postfix_str(f"LM iteration {iteration}, cost {cost_db:.1f} dB", refresh=True)
 
     def start(self, text):
         if self._bar is not None:
