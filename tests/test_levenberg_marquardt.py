@@ -1,0 +1,92 @@
+"""statespace/levenberg_marquardt.py on its own: known least-squares
+problems, the dropped directions, diverging trial steps."""
+import numpy as np
+import pytest
+
+from sklearn_pnlss.statespace.levenberg_marquardt import levenberg_marquardt, lm_step_basis
+
+
+def _normal_equations(jacobian, residual):
+    def normal_equations(theta):
+        J, e = jacobian(theta), residual(theta)
+        return J.T @ J, J.T @ e
+    return normal_equations
+
+
+def test_exponential_decay_is_fitted_exactly():
+    """y = a exp(-b t) + c from noise-free samples: LM reaches the true
+    (a, b, c) from a start 50 % off, the cost falls to rounding."""
+    t = np.linspace(0, 4, 60)
+    truth = np.array([2.0, 1.3, -0.4])
+
+    def model(th):
+        return th[0] * np.exp(-th[1] * t) + th[2]
+
+    y = model(truth)
+
+    def residual(th):
+        return model(th) - y
+
+    def jacobian(th):
+        return np.column_stack([np.exp(-th[1] * t), -th[0] * t * np.exp(-th[1] * t), np.ones_like(t)])
+
+    result = levenberg_marquardt(residual, _normal_equations(jacobian, residual), truth * [1.5, 0.5, 1.5],
+                                 max_iter=100, tol=0.0)
+    np.testing.assert_allclose(result.theta, truth, rtol=1e-10)
+    assert result.cost < 1e-25
+    costs = [c for _, c, _ in result.history]
+    assert all(b <= a for a, b in zip(costs, costs[1:]))  # only improving iterates are accepted
+
+
+def test_a_linear_problem_reaches_the_least_squares_solution():
+    rng = np.random.default_rng(0)
+    A = rng.standard_normal((40, 5))
+    b = rng.standard_normal(40)
+    lstsq = np.linalg.lstsq(A, b, rcond=None)[0]
+    result = levenberg_marquardt(lambda th: A @ th - b, lambda th: (A.T @ A, A.T @ (A @ th - b)), np.zeros(5),
+                                 max_iter=50, tol=0.0)
+    np.testing.assert_allclose(result.theta, lstsq, rtol=1e-8, atol=1e-9)
+
+
+def test_dropped_directions_leave_the_redundant_parameter_alone():
+    """y = (p + q) x depends on p + q only: with the null direction dropped,
+    every step is orthogonal to it, so p - q keeps its start value."""
+    x = np.linspace(-1, 1, 30)
+    y = 3.0 * x
+
+    def residual(th):
+        return (th[0] + th[1]) * x - y
+
+    def normal_equations(th):
+        J = np.column_stack([x, x])
+        return J.T @ J, J.T @ residual(th)
+
+    result = levenberg_marquardt(residual, normal_equations, np.array([0.5, -0.2]), n_drop=1, max_iter=20)
+    assert result.theta.sum() == pytest.approx(3.0, rel=1e-10)
+    assert result.theta[0] - result.theta[1] == pytest.approx(0.7, rel=1e-12)
+
+
+def test_step_basis_drops_the_smallest_singular_values():
+    rng = np.random.default_rng(1)
+    J = rng.standard_normal((50, 4)) * [1.0, 10.0, 100.0, 1e-3]
+    scale, S, V = lm_step_basis(J.T @ J, n_drop=1)
+    np.testing.assert_allclose(scale, np.linalg.norm(J, axis=0), rtol=1e-12)
+    S_full = np.linalg.svd(J / scale, compute_uv=False)
+    np.testing.assert_allclose(S, S_full[:3], rtol=1e-9)
+    assert V.shape == (4, 3)
+
+
+def test_a_diverging_trial_step_is_rejected_and_a_diverging_start_refused():
+    """Trial points beyond theta = 2 'diverge' (residual None): LM must not
+    return one, and must stop at the best point it could reach."""
+    def residual(th):
+        return None if th[0] > 2.0 else np.array([th[0] - 3.0])
+
+    def normal_equations(th):
+        return np.array([[1.0]]), np.array([th[0] - 3.0])
+
+    result = levenberg_marquardt(residual, normal_equations, np.array([0.0]), max_iter=200)
+    assert result.theta[0] <= 2.0
+    assert result.theta[0] > 1.9  # it creeps up to the edge with growing lambda
+    with pytest.raises(ValueError, match="starting model diverges"):
+        levenberg_marquardt(residual, normal_equations, np.array([2.5]))
