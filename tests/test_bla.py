@@ -133,3 +133,30 @@ def test_mimo_needs_blocks_of_experiments():
     X = np.random.default_rng(0).standard_normal((3, 2 * N, 2))
     with pytest.raises(ValueError, match="multiple of 2"):
         BLAEstimator(period=N).fit(X, X[..., :1])
+
+
+def test_line_detection_sets_aside_hum_and_leakage(linear_data):
+    """A measured input adds bins far below the multisine's lines (mains hum,
+    leakage): within -60 dB of the strongest line, yet with almost none of the
+    power. They are not excited lines; a designed level spread is kept."""
+    from sklearn_pnlss.frequency.bla import excited_lines
+
+    X, y, lines, _ = linear_data
+    t = np.arange(X.shape[1]) / FS
+    # 50 Hz is bin 50 * N / FS = 68.3: leaks into its neighbours at about -40 dB.
+    hum = 0.02 * 50 * np.sin(2 * np.pi * 50.0 * t) + 0.01 * 50 * np.sin(2 * np.pi * 150.0 * t)
+    X_hum = X + hum[None, :, None]
+    U = np.fft.rfft(X_hum.reshape(3, 4, N, 1).mean(axis=1), axis=1)
+    assert excited_lines(U).size > lines.size  # the plain -60 dB threshold takes the hum
+    np.testing.assert_array_equal(excited_lines(U, gap_db=20.0), lines)
+    model = BLAEstimator(n_states=2, period=N, fs=FS).fit(X_hum, y)
+    np.testing.assert_array_equal(model.lines_, lines)
+    # Two designed levels 10 dB apart, each with a real share of the power: kept.
+    spec = np.zeros((1, N // 2 + 1, 1), dtype=complex)
+    spec[0, 10:20, 0] = 1.0
+    spec[0, 20:30, 0] = 10 ** (-10 / 20)
+    spec[0, 40, 0] = 1e-3  # -60 dB + : a stray bin, set aside
+    np.testing.assert_array_equal(excited_lines(spec, gap_db=20.0), np.arange(10, 30))
+    # a lower group 20.5 dB down but with 3 % of the power is kept
+    spec[0, 40:400, 0] = 0.03
+    assert excited_lines(spec, gap_db=20.0).size == 20 + 360

@@ -156,3 +156,18 @@ def test_validation_level_argument(f16_dir):
     assert load_f16(f16_dir, level=7, validation_level=None).X_val is None
     with pytest.raises(ValueError, match="validation_level"):
         load_f16(f16_dir, level=3, validation_level=9)
+
+
+def test_excited_lines_leave_out_mains_hum(f16_dir, level3):
+    """The full multisine excites bins 41-307 (2-15 Hz). Within -60 dB of
+    the strongest line the measured force also has mains hum (bins 1024,
+    3071, 3072) and leakage below 2 Hz, with 4e-6 of its power: they are
+    not excited lines, at every level."""
+    lines = np.arange(41, 308)
+    np.testing.assert_array_equal(level3.lines, lines)
+    for level in (1, 7):
+        np.testing.assert_array_equal(load_f16(f16_dir, level=level, validation_level=None).lines, lines)
+    from sklearn_pnlss import BLAEstimator
+
+    bla = BLAEstimator(2, period=PERIOD, refine=False).fit(level3.X, level3.y)
+    np.testing.assert_array_equal(bla.lines_, lines)

@@ -154,11 +154,11 @@ def _layout(force, voltage, acc, kind):
 
 
 def _excited_lines_of(X, period):
-    from ..frequency.bla import excited_lines
+    from ..frequency.bla import DETECTION_GAP_DB, excited_lines
 
     n_per = X.shape[1] // period
     U = np.fft.rfft(X.reshape(X.shape[0], n_per, period, X.shape[2]).mean(axis=1), axis=1)
-    return excited_lines(U)
+    return excited_lines(U, gap_db=DETECTION_GAP_DB)
 
 
 def load_f16(path=None, *, level=3, kind="multisine", validation_level="paired"):
@@ -218,8 +218,9 @@ def load_f16(path=None, *, level=3, kind="multisine", validation_level="paired")
         laid out as ``X``. ``X_val, y_val``: the test record of
         ``validation_level`` in the same layout (None when there is none).
         ``fs`` (400.0), ``period`` (8192, 16384, or None for the sweep),
-        ``lines`` (excited DFT bins of one period, from the force spectrum;
-        None for the sweep), ``level``, ``validation_level``, ``kind``,
+        ``lines`` (excited DFT bins of one period, detected in the force
+        spectrum as :class:`~sklearn_pnlss.BLAEstimator` does: bins 41-307,
+        2-15 Hz, for the full multisine; None for the sweep), ``level``, ``validation_level``, ``kind``,
         ``force_level`` (the nominal level of the description, N rms for the
         multisines, N amplitude for the sweep), ``output_names``,
         ``DESCR``.

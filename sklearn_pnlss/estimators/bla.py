@@ -47,8 +47,10 @@ class BLAEstimator(SignalRegressorBase):
         Sampling frequency in Hz, used for reporting only (``frequencies_``,
         ``natural_frequencies_``); None means cycles per sample.
     lines : array-like of int or None, default=None
-        Excited DFT bins of one period; found from the input spectrum (-60 dB
-        threshold) when None.
+        Excited DFT bins of one period. When None, found from the input
+        spectrum: the bins within -60 dB of the strongest, less those below a
+        drop of 20 dB or more in the sorted bin powers that hold under 1 % of
+        the input power (mains hum, leakage or noise of a measured force).
     refine : bool, default=True
         Refine the subspace model by weighted nonlinear least squares.
     feedthrough : bool, default=True

@@ -34,19 +34,56 @@ class PeriodicBLA:
     line_kind: np.ndarray = field(repr=False)
 
 
-def excited_lines(U_spectra, threshold_db=-60.0):
+# Detection of the excited lines by periodic_bla (and so BLAEstimator): the
+# candidate bins within -60 dB of the strongest lose those below the largest
+# drop of at least DETECTION_GAP_DB in their sorted powers, when the bins below
+# it carry less than DETECTION_SHARE of the candidates' power.
+DETECTION_THRESHOLD_DB = -60.0
+DETECTION_GAP_DB = 20.0
+DETECTION_SHARE = 1e-2
+
+
+def excited_lines(U_spectra, threshold_db=DETECTION_THRESHOLD_DB, *, gap_db=None,
+                  max_share=DETECTION_SHARE):
     """DFT bins that carry input power, relative to the strongest bin.
 
     Parameters
     ----------
     U_spectra : ndarray of shape (..., n_bins, m), complex
-    threshold_db : float
-        Bins with power within ``threshold_db`` of the strongest are excited.
+    threshold_db : float, default=-60.0
+        Bins with power within ``threshold_db`` of the strongest are
+        candidates (DC never is).
+    gap_db : float or None, default=None
+        If given, the candidates are sorted by power and split at the largest
+        drop between neighbours; when that drop is at least ``gap_db`` and the
+        candidates below it carry less than ``max_share`` of the candidates'
+        power, they are not excited. A designed multisine has its lines at
+        comparable levels; a measured input adds bins far below them that hold
+        almost none of its power: leakage of the shaker's interaction, mains
+        hum (50 Hz and harmonics), noise. None keeps every candidate.
+    max_share : float, default=0.01
+        Largest share of the candidates' power the bins below the gap may
+        carry to be set aside (``gap_db`` only).
+
+    Returns
+    -------
+    lines : ndarray of int
+        The excited bins, ascending.
     """
     power = np.mean(np.abs(U_spectra) ** 2, axis=tuple(range(U_spectra.ndim - 2)))
     power = power.sum(axis=-1)
     power[0] = 0.0  # DC is never an excited line of a multisine
-    return np.flatnonzero(power > power.max() * 10 ** (threshold_db / 10))
+    lines = np.flatnonzero(power > power.max() * 10 ** (threshold_db / 10))
+    if gap_db is None or lines.size < 2:
+        return lines
+    order = np.argsort(power[lines])[::-1]
+    level_db = 10 * np.log10(power[lines][order])
+    drops = level_db[:-1] - level_db[1:]
+    cut = int(np.argmax(drops))
+    below = power[lines][order][cut + 1:]
+    if drops[cut] >= gap_db and below.sum() < max_share * power[lines].sum():
+        lines = np.sort(lines[order][: cut + 1])
+    return lines
 
 
 def _frf_of_block(U, Y):
@@ -69,7 +106,11 @@ def periodic_bla(U_periods, Y_periods, lines=None):
     Y_periods : list of ndarray of shape (P_r, N, p)
         Output, likewise.
     lines : array-like of int, default=None
-        Excited DFT bins; found from the input spectrum when None.
+        Excited DFT bins. When None, the bins of the period-averaged input
+        spectrum within -60 dB of the strongest, less those below a drop of
+        20 dB or more in the sorted bin powers that carry under 1 % of the
+        input power (mains hum, leakage, noise of a measured input; see
+        :func:`excited_lines`).
 
     Returns
     -------
@@ -99,7 +140,7 @@ def periodic_bla(U_periods, Y_periods, lines=None):
     U_mean = np.stack([u.mean(axis=0) for u in Uf])  # (R, n_bins, m)
     Y_mean = np.stack([y.mean(axis=0) for y in Yf])
     if lines is None:
-        lines = excited_lines(U_mean)
+        lines = excited_lines(U_mean, gap_db=DETECTION_GAP_DB)
     lines = np.asarray(lines, dtype=int)
     if lines.size == 0:
         raise ValueError(
