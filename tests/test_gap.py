@@ -264,3 +264,15 @@ def test_bad_signals():
         diag.fit([np.zeros(N)], [np.zeros(N)])
     with pytest.raises(ValueError, match="NaN"):
         diag.fit([np.full(N, np.nan)], [y[0][:N]])
+
+
+def test_verbose_announces_each_candidate_as_it_is_fitted(capsys):
+    from sklearn_pnlss.app.gap_demo import run_gap_demo
+
+    run_gap_demo(None, n_samples=1024, n_jobs=2, plot=False, progress=True)
+    lines = [line for line in capsys.readouterr().out.splitlines() if " done, " in line]
+    n = len(lines)
+    assert n >= 10  # every default candidate and the black box
+    assert [int(line.split("]")[1].split("/")[0]) for line in lines] == list(range(1, n + 1))
+    assert any("the black box" in line for line in lines)
+    assert all("training" in line and "dB" in line for line in lines if "black box" not in line)

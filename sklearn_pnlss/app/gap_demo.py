@@ -11,7 +11,7 @@ __all__ = ["run_gap_demo"]
 
 
 def run_gap_demo(out_dir=None, *, n_samples=2048, n_realizations=2, n_periods=2, n_jobs=2,
-                 random_state=0, plot=True):
+                 random_state=0, plot=True, progress=False):
     """Diagnose the gap between a mass-spring-damper simulator and data
     from the Bouc-Wen benchmark system (the same structure with hysteresis).
 
@@ -29,6 +29,8 @@ def run_gap_demo(out_dir=None, *, n_samples=2048, n_realizations=2, n_periods=2,
     random_state : int, default=0
     plot : bool, default=True
         Write the report's figure (needs matplotlib).
+    progress : bool, default=False
+        Print each candidate as it is fitted (the diagnosis's ``verbose``).
 
     Returns
     -------
@@ -51,7 +53,7 @@ def run_gap_demo(out_dir=None, *, n_samples=2048, n_realizations=2, n_periods=2,
     y_val = [data.y_train[-1, :n_samples], y_sweep[:, None]]
     start = time.perf_counter()
     diagnosis = GapDiagnosis(Oscillator(2.0, 10.0, 5e4), fs=data.fs, period=n_samples, n_jobs=n_jobs,
-                             random_state=random_state)
+                             random_state=random_state, verbose=int(progress))
     report = diagnosis.fit(data.X_train[:-1], data.y_train[:-1]).report(X_val, y_val)
     seconds = time.perf_counter() - start
     if out_dir is not None:

@@ -1,5 +1,6 @@
 """GapDiagnosis: where a physical simulator misses the measurements, which
 unmodelled effect explains it, and by how much adding it shrinks the gap."""
+import itertools
 import time
 from numbers import Integral, Real
 
@@ -104,7 +105,9 @@ class GapDiagnosis(BaseEstimator):
     random_state : int, RandomState instance or None, default=None
         Seed of the black-box model's random starts.
     verbose : int, default=0
-        Print progress.
+        Print progress: each candidate as soon as it is fitted (``3/12
+        done, backlash: ...`` with its training error, simulations and
+        time), the black box included.
 
     Attributes
     ----------
@@ -242,7 +245,8 @@ class GapDiagnosis(BaseEstimator):
 
         clues = read_clues(self.nominal, u_list, y_list, y_nominal, train.n_periods, self.period_, self.fs)
         coarse = train.coarse(self.fit_oversampling, self.nominal)
-        self._log(f"fitting {len(effects)} candidates on {len(u_list)} signals")
+        self._log(f"fitting {len(effects)} candidates{' and the black box' if self.black_box else ''} "
+                  f"on {len(u_list)} signals")
         ftol = meaningful_ftol(self.noise_, y_all.size)
         tasks = {e.name: delayed(fit_effect)(e, self.nominal, self.scales_, coarse, y_list, max_nfev=self.max_nfev,
                                              fine_signals=train, clues=clues, ftol=ftol)
@@ -252,11 +256,23 @@ class GapDiagnosis(BaseEstimator):
         # One pool for the candidates and the black box, the costliest
         # started first so that the last to finish is a short one.
         order = sorted(tasks, key=lambda name: -_expected_cost(name, effects))
-        done = dict(zip(order, Parallel(n_jobs=self.n_jobs, prefer="threads")(tasks[k] for k in order)))
+        finished = itertools.count(1)
+
+        def announced(name):
+            # Each candidate says when it is done (from its worker thread):
+            # the progress of a fit that takes minutes.
+            func, args, kwargs = tasks[name]
+            out = func(*args, **kwargs)
+            if self.verbose:
+                what = "the black box" if name == _BLACK_BOX else (
+                    f"{name}: training {10 * np.log10(out.train_mse):.2f} dB, {out.n_evaluations} "
+                    f"simulations, {out.seconds:.1f} s")
+                self._log(f"{next(finished)}/{len(tasks)} done, {what}")
+            return out
+
+        done = dict(zip(order, Parallel(n_jobs=self.n_jobs, prefer="threads")(
+            delayed(announced)(k) for k in order)))
         self.fits_ = [done[e.name] for e in effects]
-        for f in self.fits_:
-            self._log(f"{f.effect.name}: training {10 * np.log10(f.train_mse):.2f} dB, "
-                      f"{f.n_evaluations} simulations, {f.seconds:.1f} s")
         self.black_box_, self.black_box_branches_ = done.get(_BLACK_BOX), []
         if self.black_box_ is not None:
             # Read on the training signals: the branches' own range.
