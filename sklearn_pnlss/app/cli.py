@@ -64,7 +64,8 @@ def main(argv=None):
         from .gap_demo import run_gap_demo
 
         report, seconds = run_gap_demo(args.output_dir, n_jobs=2 if args.n_jobs in (-1, None) else args.n_jobs,
-                                       random_state=args.random_state, plot=not args.no_plots)
+                                       random_state=args.random_state, plot=not args.no_plots,
+                                       progress=not args.no_progress)
         print(report)
         print(f"\ndiagnosis in {seconds:.1f} s; gap_report.json/.txt/.png in {Path(args.output_dir).resolve()}")
         return 0
