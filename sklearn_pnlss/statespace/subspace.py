@@ -2,10 +2,11 @@
 from FRF data, weighted by the FRF variance, and its refinement by a weighted
 nonlinear least-squares fit.
 
-Both work on a warped frequency axis. Lines crowded on a short arc of the
-unit circle (the F-16's 2-15 Hz at 400 Hz: 0.03-0.24 rad) make the powers
-z^0 .. z^(q-1) of the subspace step nearly collinear and put the poles within
-1e-3 of the circle, where a least-squares step easily throws one outside. The
+By default both work on a warped frequency axis. Lines crowded on a short
+arc of the unit circle (the F-16's 2-15 Hz at 400 Hz: 0.03-0.24 rad) make
+the powers z^0 .. z^(q-1) of the subspace step nearly collinear and put the
+poles within 1e-3 of the circle, where a least-squares step easily throws
+one outside. The
 all-pass (Moebius) map zeta = (z - a) / (1 - a z), a real in (-1, 1), maps
 the unit circle and the unit disc onto themselves; it spreads the band over
 the circle (its geometric centre in tan(angle / 2) goes to a quarter turn)
