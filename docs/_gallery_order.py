@@ -14,6 +14,7 @@ ORDER = [
     "plot_grid_search_selection.py",
     "plot_dask_search.py",
     "plot_gap_diagnosis.py",
+    "plot_f16_gvt.py",
 ]
 
 
