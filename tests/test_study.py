@@ -64,6 +64,17 @@ def test_decoupled_grid_selects_on_validation_and_saves_models(tmp_path, capsys)
     assert (decoupled.n_branches, decoupled.degree) == (best["n_branches"], best["degree"])
 
 
+def test_closing_line_names_the_files_written(tmp_path, capsys):
+    """With --no-plots the job writes no figure, and its last line says so
+    (it used to announce "figures and results.json/results.csv" whatever it
+    wrote)."""
+    assert main(["--models", "bla", "--no-plots", "--no-progress", "--output-dir", str(tmp_path)]) == 0
+    last = capsys.readouterr().out.strip().splitlines()[-1]
+    assert last == f"wrote results.json, results.csv in {tmp_path.resolve()}"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["results.csv", "results.json"]
+    assert json.loads((tmp_path / "results.json").read_text())["files"] == ["results.json", "results.csv"]
+
+
 def test_unknown_model_is_a_clear_error(tmp_path):
     with pytest.raises(ValueError, match="Unknown model"):
         run_study(output_dir=tmp_path, models=("bla", "arx"), progress=False, plots=False)

@@ -67,7 +67,9 @@ def main(argv=None):
                                        random_state=args.random_state, plot=not args.no_plots,
                                        progress=not args.no_progress)
         print(report)
-        print(f"\ndiagnosis in {seconds:.1f} s; gap_report.json/.txt/.png in {Path(args.output_dir).resolve()}")
+        # run_gap_demo writes the figure only with plot=True.
+        files = ["gap_report.json", "gap_report.txt"] + ([] if args.no_plots else ["gap_report.png"])
+        print(f"\ndiagnosis in {seconds:.1f} s; {_wrote(files, args.output_dir)}")
         return 0
     summary = run_study(
         data_dir=args.data_dir, output_dir=args.output_dir, models=args.models,
@@ -88,5 +90,10 @@ def main(argv=None):
             "BLA modes: "
             + ", ".join(f"{f:.2f} Hz ({100 * z:.2f} %)" for f, z in zip(b["natural_frequencies_hz"], b["damping_ratios"]))
         )
-    print(f"figures and results.json/results.csv in {Path(args.output_dir).resolve()}")
+    print(_wrote(summary["files"], args.output_dir))
     return 0
+
+
+def _wrote(files, folder):
+    """The closing line: the files actually written, and where."""
+    return f"wrote {', '.join(files)} in {Path(folder).resolve()}"

@@ -286,7 +286,8 @@ def run_study(
         ``training`` (the data settings), ``results`` (one row per model:
         parameters, fit time, rms error in m and dB on each test signal),
         ``models`` (each model's :meth:`summary`), ``grid`` (the decoupled
-        candidates) and, with the BLA, its modes and distortion levels.
+        candidates), with the BLA its modes and distortion levels, and
+        ``files``: the names of the files written to ``output_dir``.
     """
     from ..datasets import load_bouc_wen_official, make_bouc_wen
 
@@ -329,9 +330,13 @@ def run_study(
         row["test_data"] = test_source
         rows.append(row)
     steps.done()
+    # The names of the files written, in order: the command line reports
+    # these, not a fixed list (no figures with plots=False, no grid.csv
+    # without a decoupled model, ...).
+    written = []
     if plots:
         steps.start("drawing figures")
-        _figures(out, data, fitted, preds, grid_rows)
+        written += _figures(out, data, fitted, preds, grid_rows)
         steps.done()
     if save_models:
         from ..persistence import save
@@ -339,6 +344,7 @@ def run_study(
         steps.start("saving the models")
         for name, (model, _) in fitted.items():
             save(model, out / f"{name}.joblib")
+            written.append(f"{name}.joblib")
         steps.done()
     steps.close()
     summary = {
@@ -356,6 +362,7 @@ def run_study(
             writer = csv.DictWriter(fh, fieldnames=list(grid_rows[0]))
             writer.writeheader()
             writer.writerows(grid_rows)
+        written.append("grid.csv")
     if "bla" in fitted:
         bla = fitted["bla"][0]
         summary["bla"] = {
@@ -363,6 +370,7 @@ def run_study(
             "damping_ratios": bla.damping_ratios_.tolist(),
             "distortion_levels_db": bla.distortion_levels_,
         }
+    summary["files"] = ["results.json", "results.csv", *written]
     (out / "results.json").write_text(json.dumps(summary, indent=2, default=_json_default))
     with open(out / "results.csv", "w", newline="") as fh:
         writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
@@ -379,6 +387,7 @@ def _json_default(value):
 
 
 def _figures(out, data, fitted, preds, grid_rows):
+    """Draw the figures into ``out``; return the names of the files written."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -386,9 +395,11 @@ def _figures(out, data, fitted, preds, grid_rows):
 
     from ..plotting import plot_bla, plot_branches, plot_error_spectra, plot_grid_search, plot_time_errors
 
+    written = []
     if "bla" in fitted:
         ax = plot_bla(fitted["bla"][0])
         ax.figure.savefig(out / "bla_frf.png", dpi=120, bbox_inches="tight")
+        written.append("bla_frf.png")
         plt.close(ax.figure)
     ax = plot_error_spectra(
         data.y_test_multisine[0, :, 0], {k: v["multisine"][0, :, 0] for k, v in preds.items() if "multisine" in v},
@@ -396,17 +407,20 @@ def _figures(out, data, fitted, preds, grid_rows):
     )
     ax.set_title("Test multisine: output and simulation-error spectra")
     ax.figure.savefig(out / "error_spectra_multisine.png", dpi=120, bbox_inches="tight")
+    written.append("error_spectra_multisine.png")
     plt.close(ax.figure)
     ax = plot_time_errors(
         data.y_test_sweep[0, :, 0], {k: v["sweep"][0, :, 0] for k, v in preds.items() if "sweep" in v}, data.fs
     )
     ax.set_title("Swept sine: simulation error over time")
     ax.figure.savefig(out / "error_time_sweep.png", dpi=120, bbox_inches="tight")
+    written.append("error_time_sweep.png")
     plt.close(ax.figure)
     if "decoupled" in fitted:
         axes = plot_branches(fitted["decoupled"][0], data.X_test_multisine)
         axes[0].figure.suptitle("Decoupled model: branches, and their values on the test multisine")
         axes[0].figure.savefig(out / "decoupled_branches.png", dpi=120, bbox_inches="tight")
+        written.append("decoupled_branches.png")
         plt.close(axes[0].figure)
     if len(grid_rows) > 1:
         ok = [row for row in grid_rows if row["validation_db"] is not None]
@@ -424,6 +438,8 @@ def _figures(out, data, fitted, preds, grid_rows):
         fig.suptitle("Decoupled model selection")
         fig.savefig(out / "decoupled_grid.png", dpi=120, bbox_inches="tight")
         plt.close(fig)
+        written.append("decoupled_grid.png")
+    return written
 
 
 def format_table(summary):
