@@ -1,5 +1,7 @@
 """The main job writes its table, summary files and figures."""
 import json
+import re
+from pathlib import Path
 
 import pytest
 
@@ -82,12 +84,58 @@ def test_unknown_model_is_a_clear_error(tmp_path):
 
 def test_gap_demo_finds_the_missing_hysteresis(tmp_path, capsys):
     assert main(["--gap-demo", "--output-dir", str(tmp_path), "--no-plots"]) == 0
-    assert "verdict: hysteresis" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "verdict: hysteresis" in out
     saved = json.loads((tmp_path / "gap_report.json").read_text())
     assert saved["best_effect"] == "hysteresis"
     # the Bouc-Wen benchmark's alpha, recovered
     assert saved["ranking"][0]["params"]["alpha"] == pytest.approx(5e4, rel=0.01)
     assert (tmp_path / "gap_report.txt").exists()
+    assert out.rstrip().endswith(f"wrote gap_report.json, gap_report.txt in {tmp_path.resolve()}")
+    _gap_guide_shows_this_report(out, saved)
+
+
+_GAP_GUIDE = Path(__file__).resolve().parents[1] / "docs" / "user_guide" / "gap.rst"
+_NUMBER = re.compile(r"(?:(?<![\w)\]])[-−])?(?<![\w.])\d+(?:\.\d+)?(?:e[-+]?\d+)?")
+
+
+def _same_to_printed_precision(want, got):
+    """The same text, and numbers equal to the precision ``want`` prints
+    them at, within one unit of its last digit."""
+    if _NUMBER.split(want) != _NUMBER.split(got):
+        return False
+    for a, b in zip(_NUMBER.findall(want), _NUMBER.findall(got)):
+        digits = len(a.split("e")[0].split(".")[1]) if "." in a.split("e")[0] else 0
+        if abs(float(a.replace("−", "-")) - float(b)) > 10.0 ** -digits + 1e-12:
+            return False
+    return True
+
+
+def _gap_guide_shows_this_report(printed, saved):
+    """docs/user_guide/gap.rst, "Reading a report", shows the demo's report
+    and reads figures from it: they are the ones this run prints."""
+    guide = _GAP_GUIDE.read_text()
+    section = guide[guide.index("Reading a report"):guide.index("Accuracy and cost")]
+    block = section[section.index("::\n\n") + 3:]
+    shown = [line[4:] for line in block.splitlines()[1:]]
+    shown = shown[:shown.index("...")]
+    lines = printed[printed.index("Sim-to-real gap diagnosis\n"):].splitlines()
+    assert len(lines) >= len(shown)
+    for want, got in zip(shown, lines):
+        assert _same_to_printed_precision(want, got), f"gap.rst shows {want!r}, the demo prints {got!r}"
+    # The prose under the report.
+    ranking = {row["name"]: row for row in saved["ranking"]}
+    p = ranking["hysteresis"]["params"]
+    products = {"alpha": p["alpha"], "beta*gamma": p["beta"] * p["gamma"], "beta*delta": p["beta"] * p["delta"]}
+    prose = " ".join(section.split())
+    assert f"\\alpha = {products['alpha'] / 1e4:.3f} \\cdot 10^4" in prose
+    assert f"\\beta\\gamma = {products['beta*gamma']:.0f}` and :math:`\\beta\\delta = {products['beta*delta']:.0f}`" in prose
+    assert f"closes only {100 * ranking['recalibration']['closure']:.0f} % of the gap" in prose
+    assert f"and the black box {100 * saved['black_box']['closure']:.0f} %" in prose
+    # "the Bouc-Wen parameters of the demo below to within 0.1 %" (How a candidate is fitted)
+    truth = {"alpha": 5e4, "beta*gamma": 800.0, "beta*delta": -1100.0}
+    assert "the Bouc-Wen parameters of the demo below to within 0.1 %" in " ".join(guide.split())
+    assert all(abs(products[k] / truth[k] - 1) < 1e-3 for k in truth), products
 
 
 def test_the_library_never_imports_the_app():

@@ -257,9 +257,11 @@ def run_study(
         Training data of :func:`sklearn_pnlss.datasets.make_bouc_wen`; one
         more realisation is simulated for validation (best iterate and start
         of the decoupled model, and its selection). The default 55 N rms is
-        the seed paper's: a little above the 50 N of the test multisine, so
-        that the test's peaks stay inside the range the polynomials were
-        fitted on.
+        the seed paper's: a little above the 50 N of the official test
+        multisine, so that the test's peaks stay inside the range the
+        polynomials were fitted on. Without ``data_dir`` the simulated
+        test multisine is drawn at ``rms`` too (the sweep is the
+        benchmark's).
     branches, degrees : sequence of int, default=(3,) and (10,)
         The decoupled model's selection grid: every (branches, degree) pair
         is fitted and the one with the lowest validation error is kept. The
