@@ -78,16 +78,17 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         stable ``A`` gives a bounded state for every bounded input: the
         model cannot run away on a new signal of the training kind and level
         (bounded by construction). "linear": continued along its edge
-        tangent (continuous derivative, no such guarantee; -86.69 dB where
+        tangent (continuous derivative, no such guarantee; -86.70 dB where
         "hold" gives -91.55 dB, see ``range_margin``). "polynomial": the
         plain polynomial everywhere. Inside the range nothing changes.
     range_margin : float, default=0.0
         Widening of each branch's trusted range on each side, as a fraction
         of its width. Measured on Bouc-Wen (3 branches of degree 10, the main
-        job's model, simulated 50 N test multisine): 0 gives -91.55 dB, 0.02
-        -87.89 dB, 0.1 -20.3 dB (a spurious orbit outside the range), and the
-        plain polynomial diverges; high-degree branches are steep at their
-        edges, so the default trusts only the range the data covered.
+        job's model, its simulated 55 N test multisine;
+        ``benchmarks/bench_branch_margins.py``): 0 gives -91.55 dB, 0.02
+        -88.90 dB, 0.1 -80.59 dB, and the plain polynomial -84.14 dB;
+        high-degree branches are steep at their edges, so the default trusts
+        only the range the data covered.
     average_periods, weighting, band, max_iter, tol, n_transient
         As in :class:`PNLSSRegressor`, for the decoupled model's fit.
     n_jobs : int or None, default=None
