@@ -17,7 +17,7 @@ from .calibrate import effect_model, fit_effect, meaningful_ftol, with_recalibra
 from .clues import read_clues
 from .decision import decide
 from .effects import Scales, default_effects, make_effect
-from .noise import estimate_noise
+from .noise import estimate_noise, non_excited_noise, repeated_input_noise, residual_noise
 from .report import GapReport
 from .simulate import SignalSet, simulate_signals
 from .where import locate_gap, signal_derivative
@@ -76,7 +76,9 @@ class GapDiagnosis(BaseEstimator):
         Samples per period of periodic excitations.  A signal whose length
         is a multiple of it is periodic steady state (simulated
         periodically); any other signal starts from rest.  Periodic signals
-        of two periods or more give the noise floor.
+        of two periods or more give the noise floor; without them it is
+        read from repeated inputs or from the lines the input does not
+        excite (see :mod:`sklearn_pnlss.gap.noise`).
     effects : list of str or ForceElement, default=None
         Candidate effects: names from :func:`default_effects` and/or the
         user's own force elements (every parameter of which is fitted from
@@ -114,7 +116,10 @@ class GapDiagnosis(BaseEstimator):
     scales_ : Scales
         Force, displacement, velocity and duration scales of the data.
     noise_ : NoiseFloor or None
-        Noise floor from the training periods (None with single periods).
+        Noise floor of the training signals: from their period-to-period
+        spread, else from signals of the same input, else from the best
+        model's residual at the lines the input does not excite (its
+        ``source`` and ``detail`` say which); None when the data give none.
     fits_ : list of EffectFit
         The fitted candidates, in the order of ``effects``.
     black_box_ : DecoupledPNLSSRegressor or None
@@ -238,7 +243,11 @@ class GapDiagnosis(BaseEstimator):
             u_peak=float(np.max(np.abs(u_all))),
             fs=float(self.fs),
         )
+        # The floors the data give before any fit; without them the floor
+        # is read from the fitted models' residuals once they are fitted.
         self.noise_ = estimate_noise(y_list, self.period)
+        if self.noise_ is None:
+            self.noise_ = repeated_input_noise(u_list, y_list, self.period, self.fs)
         y_nominal = simulate_signals(self.nominal, train)
         self.train_gap_db_ = float(10 * np.log10(np.mean(np.concatenate(
             [a - b for a, b in zip(y_nominal, y_list)]) ** 2)))
@@ -278,12 +287,35 @@ class GapDiagnosis(BaseEstimator):
             # Read on the training signals: the branches' own range.
             self.black_box_branches_ = branch_opinions(self.black_box_, u_list, y_list, velocity_list,
                                                        self.scales_)
+        if self.noise_ is None:
+            self.noise_ = self._model_noise_floor(train, u_list, y_list, y_nominal)
+            if self.noise_ is not None:
+                self._log(f"noise floor {10 * np.log10(self.noise_.variance):.2f} dB: {self.noise_.detail}")
         # Kept for report's "where" analysis (distortion level, drift, gap
         # against input level); passed on explicitly, read by no other module.
         self._train = (u_list, y_list)
         self._train_nominal = y_nominal
         self.fit_time_ = time.perf_counter() - start
         return self
+
+    def _model_noise_floor(self, train, u_list, y_list, y_nominal):
+        """Noise floor from the residuals of the nominal, the fitted
+        candidates and the black box at the lines the training inputs do
+        not excite (see :func:`~sklearn_pnlss.gap.noise.non_excited_noise`):
+        the floor of data that repeat no period."""
+        def simulate_fit(fit):
+            osc, transform, _ = effect_model(fit.effect, fit.theta, self.nominal, self.scales_)
+            try:
+                return simulate_signals(osc, train, transform)
+            except (ValueError, FloatingPointError):
+                return None
+
+        sims = Parallel(n_jobs=self.n_jobs, prefer="threads")(delayed(simulate_fit)(f) for f in self.fits_)
+        simulations = {"nominal": y_nominal, **{f.effect.name: s for f, s in zip(self.fits_, sims)}}
+        if self.black_box_ is not None:
+            bb = [self._black_box_predict(u) for u in u_list]
+            simulations["black box"] = None if any(b is None for b in bb) else bb
+        return non_excited_noise(u_list, y_list, simulations, self.period_, self.fs)
 
     def _black_box_predict(self, u):
         """The black box's simulation of one signal; None where it leaves its
@@ -324,11 +356,16 @@ class GapDiagnosis(BaseEstimator):
         y_black_box = None
         if self.black_box_ is not None:
             y_black_box = [self._black_box_predict(u) for u in u_list]
-        decision = decide(self.fits_, y_list, y_nominal, y_effects, y_black_box, self.noise_,
-                          self.significance)
+        noise = self.noise_
+        if noise is None and y_black_box is not None:
+            # No floor from the training data: what the black box achieves
+            # on these signals is the yardstick.
+            grid = self.period_ or max(u.size for u in self._train[0])
+            noise = residual_noise(y_list, y_black_box, grid)
+        decision = decide(self.fits_, y_list, y_nominal, y_effects, y_black_box, noise, self.significance)
         u_train, y_train = self._train
         where = locate_gap(self.nominal, u_list, y_list, y_nominal, val.n_periods, fs=self.fs,
-                           period=self.period_, noise=self.noise_, significance=self.significance,
+                           period=self.period_, noise=noise, significance=self.significance,
                            u_train=u_train, y_train=y_train, y_train_nominal=self._train_nominal)
-        return GapReport(decision=decision, where=where, scales=self.scales_, noise=self.noise_,
+        return GapReport(decision=decision, where=where, scales=self.scales_, noise=noise,
                          black_box=self.black_box_, fits=self.fits_, opinions=self.black_box_branches_)

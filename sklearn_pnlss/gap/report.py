@@ -35,6 +35,13 @@ class GapReport:
         validation gap before and after (dB), shrink (dB), closure ratio.
     gap_db, noise_floor_db : float
         Validation gap of the nominal simulator and the noise floor, dB.
+    noise_source : str or None
+        Which estimate set the noise floor (``"periods"``,
+        ``"repeated_inputs"``, ``"non_excited_lines"``,
+        ``"black_box_residual"``; None: no floor), see
+        :mod:`sklearn_pnlss.gap.noise`.
+    noise_detail : str
+        What that estimate was read from, in a sentence.
     black_box : dict or None
         The decoupled PNLSS yardstick: its validation gap and closure, and
         the reading of each branch (``branches``).
@@ -58,6 +65,8 @@ class GapReport:
         self.ranking = decision.ranking
         self.gap_db = decision.gap_before_db
         self.noise_floor_db = decision.noise_floor_db
+        self.noise_source = decision.noise_source
+        self.noise_detail = decision.noise_detail
         self.reason = decision.reason
         self.black_box = None
         if black_box is not None:
@@ -72,6 +81,7 @@ class GapReport:
             best_effect=self.best_effect, significant=self.significant, explained=self.explained,
             p_value=self.p_value, reason=self.reason, gap_db=self.gap_db,
             per_signal_gap_db=self.decision.per_signal_before_db, noise_floor_db=self.noise_floor_db,
+            noise_source=self.noise_source, noise_detail=self.noise_detail,
             ranking=[r.to_dict() for r in self.ranking], black_box=self.black_box, where=self.where,
         ))
 
@@ -80,8 +90,13 @@ class GapReport:
         verdict = {None: "no significant gap", "unexplained": "gap not explained by any candidate"}
         lines.append(f"verdict: {verdict.get(self.best_effect, self.best_effect)}")
         lines.append(f"  {self.reason}")
-        lines.append(f"nominal gap {self.gap_db:.2f} dB, noise floor {self.noise_floor_db:.2f} dB"
-                     + (f", p = {self.p_value:.2g}" if np.isfinite(self.p_value) else ""))
+        if np.isfinite(self.noise_floor_db):
+            lines.append(f"nominal gap {self.gap_db:.2f} dB, noise floor {self.noise_floor_db:.2f} dB"
+                         + (f", p = {self.p_value:.2g}" if np.isfinite(self.p_value) else ""))
+        else:
+            lines.append(f"nominal gap {self.gap_db:.2f} dB, no noise floor")
+        # Which estimate set the floor, hence the verdict.
+        lines.append(f"  noise: {self.noise_detail}")
         if self.black_box is not None:
             lines.append(f"black box (decoupled PNLSS, {self.black_box['n_params']} parameters): "
                          f"{self.black_box['gap_after_db']:.2f} dB, closure "
