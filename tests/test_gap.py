@@ -1,5 +1,6 @@
 """Sim-to-real gap diagnosis on small data whose missing effect is known."""
 import json
+import warnings
 
 import numpy as np
 import pytest
@@ -9,7 +10,7 @@ from sklearn_pnlss.gap.clues import DataClues, read_clues
 from sklearn_pnlss.gap.effects import Scales, make_effect
 from sklearn_pnlss.gap.frequency_start import measured_stiffness_change, recalibration_start
 from sklearn_pnlss.gap.noise import drift_free_variance
-from sklearn_pnlss.gap.simulate import SignalSet, prime_factors, simulate_signals
+from sklearn_pnlss.gap.simulate import SignalSet, detect_period, prime_factors, simulate_signals
 from sklearn_pnlss.physics import (
     CoupledMass,
     CubicStiffness,
@@ -276,3 +277,32 @@ def test_verbose_announces_each_candidate_as_it_is_fitted(capsys):
     assert [int(line.split("]")[1].split("/")[0]) for line in lines] == list(range(1, n + 1))
     assert any("the black box" in line for line in lines)
     assert all("training" in line and "dB" in line for line in lines if "black box" not in line)
+
+
+def test_forgetting_period_on_periodic_data_warns():
+    """Steady-state signals of two periods and period=None: a UserWarning
+    names the period the inputs repeat with and the parameter to set; none
+    with the period given, nor for single periods and a sweep."""
+    u, y, u_val, y_val = _data(NOMINAL, seed=1, noise=1e-7)
+    forgot = GapDiagnosis(NOMINAL, effects=["cubic_stiffness"], **{**FAST, "period": None})
+    with pytest.warns(UserWarning, match=r"repeat every 1024 samples \(1\.365 s, 2 periods per signal\).*"
+                                         r"pass period=1024\."):
+        forgot.fit(u, y)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        GapDiagnosis(NOMINAL, effects=["cubic_stiffness"], **FAST).fit(u, y)
+        forgot.fit([u_val[0], u_val[1]], [y_val[0], y_val[1]])  # one period and a sweep
+
+
+def test_detect_period():
+    """Multisines repeated, with a measured force's noise (1 % of the rms),
+    or slow (20 Hz at 7.5 kHz: neighbouring lags correlate too): their
+    period; single periods, a sweep or noise: None."""
+    rng = np.random.RandomState(0)
+    X, _ = multisine(N, fs=FS, rms=50.0, n_periods=3, n_realizations=2, random_state=0)
+    assert detect_period([x[:, 0] + 0.5 * rng.standard_normal(3 * N) for x in X]) == N
+    slow, _ = multisine(N, fs=10 * FS, f_band=(1.0, 20.0), rms=1.0, n_periods=2, random_state=0)
+    assert detect_period([slow[0, :, 0]]) == N
+    assert detect_period([X[0, :N, 0], X[1, :N, 0]]) is None
+    assert detect_period([linear_chirp(np.arange(3000) / FS, f_start=15.0, rate=8.0, amplitude=10.0)]) is None
+    assert detect_period([rng.standard_normal(4 * N)]) is None

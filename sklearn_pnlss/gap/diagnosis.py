@@ -2,6 +2,7 @@
 unmodelled effect explains it, and by how much adding it shrinks the gap."""
 import itertools
 import time
+import warnings
 from numbers import Integral, Real
 
 import numpy as np
@@ -19,7 +20,7 @@ from .decision import decide
 from .effects import Scales, default_effects, make_effect
 from .noise import estimate_noise, non_excited_noise, repeated_input_noise, residual_noise
 from .report import GapReport
-from .simulate import SignalSet, simulate_signals
+from .simulate import SignalSet, detect_period, simulate_signals
 from .where import locate_gap, signal_derivative
 
 __all__ = ["GapDiagnosis"]
@@ -73,7 +74,8 @@ class GapDiagnosis(BaseEstimator):
     fs : float
         Sampling rate of the signals, Hz.
     period : int, default=None
-        Samples per period of periodic excitations.  A signal whose length
+        Samples per period of periodic excitations (a UserWarning names the
+        period when the training inputs repeat and this is None).  A signal whose length
         is a multiple of it is periodic steady state (simulated
         periodically); any other signal starts from rest.  Periodic signals
         of two periods or more give the noise floor; without them it is
@@ -226,6 +228,8 @@ class GapDiagnosis(BaseEstimator):
         u_list, y_list = _siso(X, "X"), _siso(y, "y")
         _check_pairs(u_list, y_list, "X", "y")
         effects = self._candidates()
+        if self.period_ is None:
+            self._warn_if_periodic(u_list)
         train = self._signal_set(u_list)
 
         y_all = np.concatenate(y_list)
@@ -297,6 +301,24 @@ class GapDiagnosis(BaseEstimator):
         self._train_nominal = y_nominal
         self.fit_time_ = time.perf_counter() - start
         return self
+
+    def _warn_if_periodic(self, u_list):
+        """Warn when the training inputs repeat themselves and no period was
+        given: steady-state data would be simulated from rest (a transient
+        the measurement does not hold) and their periods would give no
+        noise floor."""
+        found = detect_period(u_list)
+        if found is None:
+            return
+        n_periods = [u.size / found for u in u_list]
+        whole = all(abs(p - round(p)) < 1e-9 for p in n_periods)
+        warnings.warn(
+            f"The training inputs look periodic: they repeat every {found} samples "
+            f"({found / self.fs:.4g} s"
+            + (f", {'/'.join(str(round(p)) for p in sorted(set(n_periods)))} periods per signal" if whole else "")
+            + f"), but period=None, so every signal is simulated from rest and no noise floor is read from "
+            f"its periods. If they are in steady state, pass period={found}.",
+            UserWarning, stacklevel=3)
 
     def _model_noise_floor(self, train, u_list, y_list, y_nominal):
         """Noise floor from the residuals of the nominal, the fitted

@@ -282,8 +282,8 @@ def non_excited_noise(u_list, y_list, simulations, period, fs):
         level = sum(p[m].sum() for p, m, _ in records) / max(sum(m.sum() for _, m, _ in records), 1)
         if best is None or level < best[0]:
             best = (level, name, spectrum, n_lines)
-    if best is None:
-        return None
+    if best is None or not best[0] > 0:
+        return None  # nothing, or exactly nothing (noiseless data): no floor to speak of
     _, name, spectrum, n_lines = best
     return _from_spectrum(spectrum, n_grid, source="non_excited_lines", upper_bound=True, detail=(
         f"residual of the {name} model at the {n_lines} DFT lines the input does not excite "

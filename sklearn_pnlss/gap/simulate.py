@@ -15,7 +15,7 @@ from ..physics.oscillator import STATE_Z, band_limited_noise
 from ..physics.resampling import decimate_fir, upsample_fft
 from ..utils.validation import is_periodic
 
-__all__ = ["SignalSet", "simulate_signals", "prime_factors"]
+__all__ = ["SignalSet", "simulate_signals", "prime_factors", "detect_period"]
 
 
 def prime_factors(n):
@@ -28,6 +28,54 @@ def prime_factors(n):
             n //= d
         d += 1
     return tuple(factors) or (1,)
+
+
+def detect_period(signals, *, min_period=16, threshold=0.99):
+    """The period, in samples, of signals that repeat themselves, or None.
+
+    A signal repeats with lag ``L`` when its normalised autocorrelation
+    there, ``sum x[n] x[n + L]`` over the root of the two overlapping parts'
+    energies, exceeds ``threshold`` (0.99: the periods differ by about
+    -17 dB of the signal, a measured force's noise included).  The first
+    run of lags above it, between ``min_period`` and half the length, is
+    taken and the lag at its peak returned (a smooth signal stays above the
+    threshold for a few lags around its period).  A random-phase multisine
+    has an autocorrelation of the order of one over the root of its number
+    of lines away from multiples of its period, noise and sweeps one that
+    never comes back; a single period tells nothing.
+
+    Parameters
+    ----------
+    signals : list of ndarray (n_samples_i,)
+    min_period : int, default=16
+    threshold : float, default=0.99
+
+    Returns
+    -------
+    period : int or None
+        The smallest period found over the signals that repeat.
+    """
+    found = []
+    for x in signals:
+        x = np.asarray(x, float) - np.mean(x)
+        n = x.size
+        if n < 2 * min_period:
+            continue
+        spec = np.fft.rfft(x, 2 * n)  # zero-padded: the linear autocorrelation
+        ac = np.fft.irfft(np.abs(spec) ** 2, 2 * n)[:n]
+        energy = np.concatenate([[0.0], np.cumsum(x**2)])
+        lags = np.arange(min_period, n // 2 + 1)
+        # energies of x[:n-L] and x[L:]
+        head, tail = energy[n - lags], energy[n] - energy[lags]
+        r = ac[lags] / np.sqrt(np.maximum(head * tail, 1e-300))
+        above = np.flatnonzero(r > threshold)
+        if above.size == 0:
+            continue
+        run_end = above[0]
+        while run_end + 1 < r.size and r[run_end + 1] > threshold:
+            run_end += 1
+        found.append(int(lags[above[0] + np.argmax(r[above[0]:run_end + 1])]))
+    return min(found) if found else None
 
 
 @dataclass
