@@ -70,7 +70,7 @@ def test_single_periods_name_the_cubic_stiffness(single_periods):
     assert best.name == "cubic_stiffness"
     assert best.params["k3"] == pytest.approx(-1e8, rel=0.01)
     assert best.closure > 0.99
-    # measured: -62.6 dB -> -114.7 dB, noise added -114.7 dB, floor -114.2 dB
+    # measured: -62.6 dB -> -114.7 dB, noise added -114.7 dB, floor -114.4 dB
     assert report.gap_db > -64 and best.gap_after_db < _db(noise_var) + 0.5
     assert abs(report.noise_floor_db - _db(noise_var)) < 1.0
     assert report.significant and report.p_value < 1e-10

@@ -220,8 +220,11 @@ def decide(fits, y_meas, y_nominal, y_effects, y_black_box, noise, significance)
             reason += f"; as good within the noise: {others} (more parameters or new physics)"
     else:
         name = "unexplained"
-        reason = (f"the best candidate, {best.name}, closes only {percent(best.closure)} of the gap"
-                  + (f"; the black box closes {percent(bb_closure)}" if np.isfinite(bb_closure) else ""))
+        reason = f"the best candidate, {best.name}, closes only {percent(best.closure)} of the gap"
+        if np.isfinite(bb_closure):
+            reason += f"; the black box closes {percent(bb_closure)}"
+        elif y_black_box is not None:
+            reason += "; the black box diverged"
         if noise is None:
             # Say why a closure may fall short: the floor is a guess.
             reason += f" (no noise floor: closure counted against a floor {NO_FLOOR_DB:.0f} dB below the gap)"

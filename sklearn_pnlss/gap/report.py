@@ -1,6 +1,8 @@
 """The diagnosis report: verdict, ranking, where the gap lies, figures."""
 import numpy as np
 
+from .decision import percent
+
 __all__ = ["GapReport"]
 
 
@@ -17,6 +19,26 @@ def _plain(x):
     if isinstance(x, (np.integer, np.bool_)):
         return x.item()
     return x
+
+
+def _number(x, digits=2, width=0):
+    """``x`` to ``digits`` decimals without a minus sign on a zero
+    (``-0.00``), ``diverged`` for the infinite error of a simulation that
+    diverged."""
+    if not np.isfinite(x):
+        text = "diverged"
+    else:
+        text = f"{x:.{digits}f}"
+        if float(text) == 0:
+            text = text.lstrip("-")
+    return f"{text:>{width}}"
+
+
+def _percent(fraction, width=0):
+    """A closure in whole percent, ``-0`` shown as ``0``; ``-`` when it
+    diverged."""
+    text = "-" if not np.isfinite(fraction) else f"{round(100 * fraction):d}%"
+    return f"{text:>{width}}"
 
 
 class GapReport:
@@ -98,16 +120,20 @@ class GapReport:
         # Which estimate set the floor, hence the verdict.
         lines.append(f"  noise: {self.noise_detail}")
         if self.black_box is not None:
-            lines.append(f"black box (decoupled PNLSS, {self.black_box['n_params']} parameters): "
-                         f"{self.black_box['gap_after_db']:.2f} dB, closure "
-                         f"{100 * self.black_box['closure']:.0f} %")
+            head = f"black box (decoupled PNLSS, {self.black_box['n_params']} parameters): "
+            if np.isfinite(self.black_box["gap_after_db"]):
+                lines.append(head + f"{_number(self.black_box['gap_after_db'])} dB, closure "
+                             f"{percent(self.black_box['closure'])}")
+            else:  # its simulation of a validation signal ran away
+                lines.append(head + "diverged on a validation signal (no yardstick)")
             for i, b in enumerate(self.black_box["branches"]):
                 lines.append(f"  branch {i + 1}: {b['reading']}")
         lines.append("")
         lines.append(f"{'candidate':<22}{'params':>7}{'after dB':>10}{'shrink dB':>11}{'closure':>9}")
         for r in self.ranking:
-            lines.append(f"{r.name:<22}{r.n_params:>7}{r.gap_after_db:>10.2f}{r.shrink_db:>11.2f}"
-                         f"{100 * r.closure:>8.0f}%")
+            shrink = _number(r.shrink_db, width=11) if np.isfinite(r.gap_after_db) else f"{'-':>11}"
+            lines.append(f"{r.name:<22}{r.n_params:>7}{_number(r.gap_after_db, width=10)}{shrink}"
+                         f"{_percent(r.closure, width=9)}")
         best = next((r for r in self.ranking if r.name == self.best_effect), None)
         if best is not None:
             params = ", ".join(f"{k} = {v:.4g}" for k, v in best.params.items())
@@ -115,9 +141,14 @@ class GapReport:
         freq = self.where.get("frequency")
         if freq is not None:
             lines.append("\nwhere in frequency (validation, periodic signals):")
+            # The band figures are sums over their lines, not per line: a
+            # band's gap and noise compare with each other, not with the
+            # nominal gap above (a mean square per sample).
+            lines.append("  dB of the power summed over each band's lines (|X_k|^2 / N per line, one period)")
             lines.append(f"  {'band Hz':<16}{'gap dB':>9}{'noise dB':>10}{'significant lines':>19}")
             for b in freq["bands"]:
-                lines.append(f"  {b['f_lo']:6.1f}-{b['f_hi']:<8.1f}{b['gap_db']:>9.1f}{b['noise_db']:>10.1f}"
+                lines.append(f"  {b['f_lo']:6.1f}-{b['f_hi']:<8.1f}{_number(b['gap_db'], 1, 9)}"
+                             f"{_number(b['noise_db'], 1, 10)}"
                              f"{b['n_significant']:>10d} / {b['n_lines']}")
             if freq["detection_lines"]:
                 for k, v in freq["line_kinds"].items():
@@ -125,7 +156,7 @@ class GapReport:
         drift = self.where.get("time", {}).get("drift")
         if drift is not None:
             lines.append(f"\nperiod-to-period change of the training response: "
-                         f"{drift['change_vs_noise_db'][-1]:.1f} dB over noise"
+                         f"{_number(drift['change_vs_noise_db'][-1], 1)} dB over noise"
                          + (" (drifting)" if drift["drifting"] else ""))
         return "\n".join(lines)
 
@@ -163,7 +194,7 @@ class GapReport:
         ax.axvline(self.gap_db, color="C3", label="nominal")
         if np.isfinite(self.noise_floor_db):
             ax.axvline(self.noise_floor_db, color="k", ls="--", label="noise floor")
-        if self.black_box is not None:
+        if self.black_box is not None and np.isfinite(self.black_box["gap_after_db"]):
             ax.axvline(self.black_box["gap_after_db"], color="C1", ls=":", label="black box")
         finite = [a for a in after if np.isfinite(a)] + [self.gap_db]
         ax.set_xlim(min(finite + [self.noise_floor_db if np.isfinite(self.noise_floor_db) else self.gap_db]) - 3,
