@@ -5,7 +5,7 @@ import pytest
 
 from sklearn_pnlss.gap.calibrate import effect_model, fit_effect, meaningful_ftol, with_recalibration
 from sklearn_pnlss.gap.effects import Effect, Scales, delay_signal, make_effect
-from sklearn_pnlss.gap.noise import NoiseFloor
+from sklearn_pnlss.gap.noise_floor import NoiseFloor
 from sklearn_pnlss.gap.simulate import SignalSet, simulate_signals
 from sklearn_pnlss.physics import BoucWen, CubicStiffness, Oscillator
 from sklearn_pnlss.signals import multisine

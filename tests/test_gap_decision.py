@@ -8,7 +8,7 @@ from scipy import stats
 from sklearn_pnlss.gap.calibrate import EffectFit
 from sklearn_pnlss.gap.decision import EXPLAINED_CLOSURE, MIN_EXCESS_DB, TIE_CLOSURE, decide
 from sklearn_pnlss.gap.effects import Effect
-from sklearn_pnlss.gap.noise import NoiseFloor, gap_test
+from sklearn_pnlss.gap.noise_floor import NoiseFloor, gap_test
 
 S2 = 1e-12  # noise variance, m^2
 NOISE = NoiseFloor(variance=S2, spectrum=np.full(513, S2), dof_per_sample=1.0)

@@ -1,5 +1,5 @@
 """The noise floor of the gap diagnosis when no period repeats
-(sklearn_pnlss.gap.noise), and the verdict it sets.
+(sklearn_pnlss.gap.noise_floor), and the verdict it sets.
 
 Issue 16, item 3: nominal + ``CubicStiffness(-1e8)``, one period per
 training signal.  The cubic term takes the error from about -62 dB down to
@@ -14,7 +14,7 @@ from sklearn_pnlss.gap import GapDiagnosis
 from sklearn_pnlss.gap.calibrate import EffectFit
 from sklearn_pnlss.gap.decision import BLACK_BOX_MIN_CLOSURE, EXPLAINED_CLOSURE, decide
 from sklearn_pnlss.gap.effects import Effect
-from sklearn_pnlss.gap.noise import (
+from sklearn_pnlss.gap.noise_floor import (
     NoiseFloor,
     estimate_noise,
     non_excited_noise,

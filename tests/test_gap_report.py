@@ -7,7 +7,7 @@ import numpy as np
 from sklearn_pnlss.gap.calibrate import EffectFit
 from sklearn_pnlss.gap.decision import decide, percent
 from sklearn_pnlss.gap.effects import Effect
-from sklearn_pnlss.gap.noise import NoiseFloor
+from sklearn_pnlss.gap.noise_floor import NoiseFloor
 from sklearn_pnlss.gap.report import GapReport
 
 S2 = 1e-12

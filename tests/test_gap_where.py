@@ -8,7 +8,7 @@ right number of dB.
 import numpy as np
 import pytest
 
-from sklearn_pnlss.gap.noise import NoiseFloor, estimate_noise
+from sklearn_pnlss.gap.noise_floor import NoiseFloor, estimate_noise
 from sklearn_pnlss.gap.simulate import SignalSet, simulate_signals
 from sklearn_pnlss.gap.where import content_limit, locate_gap, missing_force, signal_derivative
 from sklearn_pnlss.physics import BoucWen, Oscillator

@@ -3,7 +3,7 @@
 Two readings of the measurements against the nominal simulator:
 
 * the change of dynamic stiffness at the excited lines (see
-  :mod:`sklearn_pnlss.gap.frequency_start`), which linear candidates (a
+  :mod:`sklearn_pnlss.gap.stiffness_start`), which linear candidates (a
   second mode, recalibration) are fitted to first;
 * the missing force along the measured motion (see
   :func:`sklearn_pnlss.gap.where.missing_force`), a restoring-force
@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .frequency_start import measured_stiffness_change
+from .stiffness_start import measured_stiffness_change
 from .where import content_limit, missing_force
 
 __all__ = ["DataClues", "read_clues", "backlash_start"]

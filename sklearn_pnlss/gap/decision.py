@@ -30,7 +30,7 @@ The rules, in order:
    physics closes).
 
 The noise floor is the training signals' (see
-:mod:`sklearn_pnlss.gap.noise`; its ``source`` is in the decision and the
+:mod:`sklearn_pnlss.gap.noise_floor`; its ``source`` is in the decision and the
 report).  With no floor at all, closure counts against a floor
 ``NO_FLOOR_DB`` below the nominal gap and no test is made.
 """
@@ -38,7 +38,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from .noise import gap_test
+from .noise_floor import gap_test
 
 __all__ = ["RankedEffect", "Decision", "decide", "MIN_EXCESS_DB", "EXPLAINED_CLOSURE", "TIE_CLOSURE",
            "BLACK_BOX_MIN_CLOSURE", "NO_FLOOR_DB"]

@@ -18,7 +18,7 @@ from .calibrate import effect_model, fit_effect, meaningful_ftol, with_recalibra
 from .clues import read_clues
 from .decision import decide
 from .effects import Scales, default_effects, make_effect
-from .noise import estimate_noise, non_excited_noise, repeated_input_noise, residual_noise
+from .noise_floor import estimate_noise, non_excited_noise, repeated_input_noise, residual_noise
 from .report import GapReport
 from .simulate import SignalSet, detect_period, simulate_signals
 from .where import locate_gap, signal_derivative
@@ -80,7 +80,7 @@ class GapDiagnosis(BaseEstimator):
         periodically); any other signal starts from rest.  Periodic signals
         of two periods or more give the noise floor; without them it is
         read from repeated inputs or from the lines the input does not
-        excite (see :mod:`sklearn_pnlss.gap.noise`).
+        excite (see :mod:`sklearn_pnlss.gap.noise_floor`).
     effects : list of str or ForceElement, default=None
         Candidate effects: names from :func:`default_effects` and/or the
         user's own force elements (every parameter of which is fitted from
@@ -323,7 +323,7 @@ class GapDiagnosis(BaseEstimator):
     def _model_noise_floor(self, train, u_list, y_list, y_nominal):
         """Noise floor from the residuals of the nominal, the fitted
         candidates and the black box at the lines the training inputs do
-        not excite (see :func:`~sklearn_pnlss.gap.noise.non_excited_noise`):
+        not excite (see :func:`~sklearn_pnlss.gap.noise_floor.non_excited_noise`):
         the floor of data that repeat no period."""
         def simulate_fit(fit):
             osc, transform, _ = effect_model(fit.effect, fit.theta, self.nominal, self.scales_)

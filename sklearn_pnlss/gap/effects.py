@@ -25,7 +25,7 @@ from ..physics.forces import (
     StiffnessDrift,
 )
 from .clues import backlash_start
-from .frequency_start import recalibration_start, second_mode_start
+from .stiffness_start import recalibration_start, second_mode_start
 
 __all__ = ["Scales", "Effect", "default_effects", "make_effect", "BUILT_IN"]
 

@@ -61,7 +61,7 @@ class GapReport:
         Which estimate set the noise floor (``"periods"``,
         ``"repeated_inputs"``, ``"non_excited_lines"``,
         ``"black_box_residual"``; None: no floor), see
-        :mod:`sklearn_pnlss.gap.noise`.
+        :mod:`sklearn_pnlss.gap.noise_floor`.
     noise_detail : str
         What that estimate was read from, in a sentence.
     black_box : dict or None

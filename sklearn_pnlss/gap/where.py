@@ -272,7 +272,7 @@ def locate_gap(nominal, u_list, y_list, y_nominal, n_periods, *, fs, period, noi
         Samples per period of the periodic signals.
     noise : NoiseFloor or None
         Noise floor of the training periods (see
-        :func:`~sklearn_pnlss.gap.noise.estimate_noise`); without it there
+        :func:`~sklearn_pnlss.gap.noise_floor.estimate_noise`); without it there
         is no frequency analysis and no drift reading.
     significance : float
         Level of the per-line test of the gap against the noise floor

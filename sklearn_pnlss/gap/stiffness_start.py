@@ -1,4 +1,5 @@
-"""Starting points of the linear candidates from the measured FRF.
+"""Starting points of the linear candidates (second mode, recalibration)
+from the measured change of dynamic stiffness.
 
 A lightly damped second mode makes the simulation error a rugged function
 of its frequency: a local optimiser started a factor two off settles on a
