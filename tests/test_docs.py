@@ -483,6 +483,8 @@ FIGURES = [
            lambda: [importlib.import_module("sklearn_pnlss.gap.decision").TIE_CLOSURE]),
     Figure(GAP, "must close at least 90 % of the gap", "gap.decision.EXPLAINED_CLOSURE",
            lambda: [100 * importlib.import_module("sklearn_pnlss.gap.decision").EXPLAINED_CLOSURE]),
+    Figure(GAP, "the black box itself closes at least 80 %", "gap.decision.BLACK_BOX_MIN_CLOSURE",
+           lambda: [100 * importlib.import_module("sklearn_pnlss.gap.decision").BLACK_BOX_MIN_CLOSURE]),
     Figure(GAP, "(3 states, 3 branches, degree 7,", "gap.black_box N_STATES, N_BRANCHES, DEGREE",
            lambda: [getattr(importlib.import_module("sklearn_pnlss.gap.black_box"), name)
                     for name in ("N_STATES", "N_BRANCHES", "DEGREE")]),
