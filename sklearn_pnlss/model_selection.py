@@ -126,7 +126,7 @@ def cpd_rank_scan(pnlss, X, ranks=range(1, 9), *, n_points=500, n_init=3, random
     check_is_fitted(pnlss, "model_")
     X_list, _, _ = validate_signals(pnlss, X, reset=False)
     model = pnlss.model_
-    trajectory = model.normalised.trajectory([model.normalise_inputs(U) for U in X_list], pnlss.period_)
+    trajectory = model.normalised_trajectory(X_list, pnlss.period_)
     points = sample_points(trajectory, n_points=n_points, random_state=random_state)
     J = nonlinear_jacobian_tensor(model.normalised, points)
     return rank_scan(J, list(ranks), n_init=n_init, random_state=random_state)

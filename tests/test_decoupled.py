@@ -160,7 +160,7 @@ def test_z_range_is_that_of_the_fitted_model():
     X, y = _data()
     model = _small().fit(X, y)
     fitted = model.model_
-    traj = fitted.normalised.trajectory([fitted.normalise_inputs(U) for U in X], N)
+    traj = fitted.normalised_trajectory(X, N)
     z = traj @ fitted.normalised.V
     np.testing.assert_allclose(model.z_range_, np.column_stack([z.min(0), z.max(0)]))
     # In user units too: V_ maps the user's [x; u] (x in the exported basis).

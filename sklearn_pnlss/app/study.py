@@ -10,6 +10,7 @@ prints.
 import csv
 import json
 import time
+from contextlib import ExitStack
 from pathlib import Path
 
 import numpy as np
@@ -31,7 +32,7 @@ class _Steps:
 
     def __init__(self, total, enabled):
         self._bar = None
-        self._listening = None
+        self._listening = ExitStack()
         self._drawn = 0.0
         if enabled:
             try:
@@ -41,8 +42,7 @@ class _Steps:
             except ImportError:  # pragma: no cover - tqdm is optional
                 self._bar = None
         if self._bar is not None:
-            self._listening = iteration_listener(self._iteration)
-            self._listening.__enter__()
+            self._listening.enter_context(iteration_listener(self._iteration))
 
     def _iteration(self, iteration, cost_db):
         # Called from the fitting threads (parallel starts interleave);
@@ -65,9 +65,7 @@ class _Steps:
             self._bar.update(1)
 
     def close(self):
-        if self._listening is not None:
-            self._listening.__exit__(None, None, None)
-            self._listening = None
+        self._listening.close()
         if self._bar is not None:
             self._bar.set_description("done")
             self._bar.set_postfix_str("")

@@ -84,8 +84,8 @@ class StateSpaceRegressorBase(SignalRegressorBase):
         objectives = simulation_objectives(start, X_list, y_list, settings, weights)
         self._set_fit_result(self._fit_from_start(start, objectives, settings, val, X_list))
         self._export(X_list)
-        self.n_params_ = self.model_.normalised.n_params
-        self.n_nonlinear_params_ = self.model_.normalised.n_nonlinear_params
+        self.n_params_ = self.model_.n_params
+        self.n_nonlinear_params_ = self.model_.n_nonlinear_params
         return self
 
     def _handed_period(self, stage):
@@ -199,9 +199,12 @@ class StateSpaceRegressorBase(SignalRegressorBase):
         >>> import numpy as np
         >>> from sklearn_pnlss import PNLSSRegressor
         >>> from sklearn_pnlss.signals import multisine
+        >>> from scipy.signal import lfilter
         >>> X, _ = multisine(128, fs=100.0, f_band=(1, 40), n_periods=2, n_realizations=2, random_state=0)
-        >>> y = X + 0.2 * X**2
-        >>> model = PNLSSRegressor(1, degrees=(2,), period=128, max_iter=5).fit(X, y)
+        >>> # steady state of v(t) = 0.6 v(t-1) + 0.5 u(t-1), then y = v + 0.2 v^2
+        >>> v = np.stack([np.tile(lfilter([0.0, 0.5], [1, -0.6], np.tile(x[:128, 0], 3))[-128:], 2)
+        ...               for x in X])[..., None]
+        >>> model = PNLSSRegressor(1, degrees=(2,), period=128, max_iter=5).fit(X, v + 0.2 * v**2)
         >>> bool(model.range_excursion(X).max() <= model.range_margin)
         True
         >>> bool(model.range_excursion(3 * X).max() > 1)

@@ -225,10 +225,9 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         """Normalised ``[x; u]`` along the simulation of the training inputs
         by ``model`` (a ScaledModel), in periodic steady state, or from rest
         when the steady-state iteration diverges."""
-        U_list = [model.normalise_inputs(U) for U in X_list]
         for per in dict.fromkeys((self.period_, None)):
             try:
-                return model.normalised.trajectory(U_list, per)
+                return model.normalised_trajectory(X_list, per)
             except DivergenceError:
                 continue
         raise ValueError(
@@ -326,14 +325,13 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         out = []
         for U in X_list:
             period = self.period_ if self._signal_is_periodic(U.shape[0]) else None
-            model = self.model_.normalised
             try:
-                s = model.states_inputs(self.model_.normalise_inputs(U), period)
+                s = self.model_.normalised_trajectory([U], period)
             except DivergenceError as exc:
                 raise ValueError(f"{type(self).__name__}.branch_inputs: {exc}; X drives the model far "
                                  "outside the range it was fitted on.") from None
             # Both in normalised units: V_ absorbed the scaling, z is the same.
-            out.append(s @ model.V)
+            out.append(s @ self.model_.normalised.V)
         return restore_layout(out, layout)
 
     def branch_values(self, z=None, n_points=200):

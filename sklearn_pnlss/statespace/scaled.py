@@ -82,6 +82,10 @@ class ScaledModel:
     def n_params(self):
         return self.normalised.n_params
 
+    @property
+    def n_nonlinear_params(self):
+        return self.normalised.n_nonlinear_params
+
     def with_normalised(self, normalised):
         """The same scales around another normalised model."""
         return replace(self, normalised=normalised)
@@ -103,6 +107,13 @@ class ScaledModel:
         ``U`` (periodic steady state for a signal of whole periods)."""
         s = self.normalised.states_inputs(self.normalise_inputs(U), period)
         return s * np.concatenate([self.state_scale, self.input_scale])
+
+    def normalised_trajectory(self, U_list, period=None):
+        """``[x_n; u_n]`` in normalised units along the simulation of the
+        user-unit inputs ``U_list``, stacked (periodic steady state for
+        signals of whole periods): where the normalised model's
+        nonlinearity is evaluated."""
+        return self.normalised.trajectory([self.normalise_inputs(U) for U in U_list], period)
 
     def range_excursion(self, U, period=None):
         """How far the simulation of ``U`` takes the nonlinearity past its
