@@ -218,7 +218,7 @@ def test_missing_force_of_a_stiffness_error(noisy_multisines):
     u, _, _, _ = noisy_multisines
     real = Oscillator(2.0, 10.0, 5.5e4)
     y = simulate_signals(real, SignalSet.from_signals(u, N, FS, 20))
-    y_disp, _, force = missing_force(NOMINAL, u, y, [2, 2, 2], N, FS, content_limit(u, FS))
+    y_disp, _, _, force = missing_force(NOMINAL, u, y, [2, 2, 2], N, FS, content_limit(u, FS))
     assert y_disp.size == 3 * N  # periods averaged, one per signal
     slope = np.polyfit(y_disp, force, 1)[0]
     assert slope == pytest.approx(5e3, rel=0.01)

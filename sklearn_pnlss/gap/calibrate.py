@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
+from .clues import force_law_start
 from .effects import Effect
 from .simulate import FIT_MAX_PERIODS, simulate_signals
 
@@ -22,6 +23,9 @@ __all__ = ["EffectFit", "with_recalibration", "meaningful_ftol", "fit_effect", "
 # to the displacement scale: far above any real misfit.
 _PENALTY = 1e3
 _FD_STEP = 1e-5
+#: Training error at the reporting rate over the defect-corrected coarse
+#: one above which the fit is refined at the reporting rate (3 dB).
+FINE_MISMATCH = 2.0
 
 
 @dataclass
@@ -56,10 +60,16 @@ class EffectFit:
 
 
 def with_recalibration(effect, recalibration):
-    """The effect with the nominal mass, damping and stiffness free too."""
+    """The effect with the nominal parameters that ``recalibration`` refits
+    (see :func:`~sklearn_pnlss.gap.effects.recalibration_effect`) free too.
+
+    Its ``theta`` is the effect's own followed by the recalibration's; the
+    report reads the recalibrated values beside the effect's.
+    """
     # Split theta by the effect's own fitted parameters (its bounds), not by
     # the parameters it reports: hysteresis reports beta, which is fixed.
     n = effect.bounds[0].size
+    free = recalibration.param_names
 
     def build(theta, nominal, scales):
         forces, _, transform, physical = effect.build(theta[:n], nominal, scales)
@@ -71,6 +81,11 @@ def with_recalibration(effect, recalibration):
               np.concatenate([effect.bounds[1], recalibration.bounds[1]]))
 
     def data_start(clues, nominal, scales, bounds):
+        if effect.force_law is not None:
+            # effect and nominal errors together, from the missing force
+            joint = force_law_start(clues, effect.force_law, nominal, scales, free)
+            if joint is not None:
+                return joint
         # the effect's own data start (or its first listed one) with the
         # nominal parameters as the stiffness change suggests
         own = effect.data_starts(clues, nominal, scales) or effect.starts[:1]
@@ -78,7 +93,7 @@ def with_recalibration(effect, recalibration):
         return np.concatenate([own[0], recal[0]])
 
     return Effect(effect.name, effect.param_names + recalibration.param_names, starts, bounds, build,
-                  effect.description, effect.is_recalibration, data_start)
+                  effect.description, effect.is_recalibration, data_start, effect.force_law)
 
 
 def effect_model(effect, theta, nominal, scales):
@@ -217,6 +232,17 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
             n_evaluations += obj.n_evaluations + 2
         except (ValueError, FloatingPointError):
             pass  # keep the coarse estimate
+        r = obj(theta)
+        fine_obj = _Objective(effect, nominal, scales, fine_signals, y_meas)
+        r_fine = fine_obj(theta)
+        if np.mean(r_fine**2) > FINE_MISMATCH * np.mean(r**2):
+            # The coarse rate's correction no longer holds: a strong
+            # nonlinearity whose steady state (or a sweep's jump) depends on
+            # the integration rate settles on another branch at each rate.
+            # Refine at the reporting rate itself.
+            theta, converged, message, _ = _solve(fine_obj, theta, lower, upper, max(3, max_nfev // 4), ftol)
+        n_evaluations += fine_obj.n_evaluations
+        obj = fine_obj
     r = obj(theta)
     mse = float(np.mean(r**2)) * scales.displacement**2
     _, _, physical = effect_model(effect, theta, nominal, scales)

@@ -21,7 +21,7 @@ import numpy as np
 from .stiffness_start import measured_stiffness_change
 from .where import content_limit, missing_force
 
-__all__ = ["DataClues", "read_clues", "backlash_start"]
+__all__ = ["DataClues", "read_clues", "backlash_start", "force_law_start", "LINEAR_COLUMNS"]
 
 
 @dataclass
@@ -32,7 +32,7 @@ class DataClues:
     ----------
     change : StiffnessChange or None
         Measured change of dynamic stiffness (None without periodic data).
-    displacement, velocity, force : ndarray or None
+    displacement, velocity, acceleration, force : ndarray or None
         The measured motion and the force the nominal simulator misses
         along it (None when it cannot be read).
     """
@@ -40,6 +40,7 @@ class DataClues:
     change: object = None
     displacement: np.ndarray = None
     velocity: np.ndarray = None
+    acceleration: np.ndarray = None
     force: np.ndarray = None
 
 
@@ -47,10 +48,59 @@ def read_clues(nominal, u_list, y_list, y_nominal, n_periods, period, fs):
     """:class:`DataClues` of the training signals."""
     change = measured_stiffness_change(u_list, y_list, y_nominal, period, fs)
     try:
-        y, v, f = missing_force(nominal, u_list, y_list, n_periods, period, fs, content_limit(u_list, fs))
+        y, v, a, f = missing_force(nominal, u_list, y_list, n_periods, period, fs, content_limit(u_list, fs))
     except ValueError:
-        y = v = f = None
-    return DataClues(change, y, v, f)
+        y = v = a = f = None
+    return DataClues(change, y, v, a, f)
+
+
+#: The missing force per unit change of each recalibrated nominal parameter
+#: (see :func:`sklearn_pnlss.gap.effects.recalibration_effect`: mass
+#: ``m (1 + t)``, damping ``c + t F / V``, stiffness ``k + t F / Y``).
+LINEAR_COLUMNS = {
+    "mass": lambda clues, nominal, s: nominal.mass * clues.acceleration,
+    "damping": lambda clues, nominal, s: s.force / s.velocity * clues.velocity,
+    "stiffness": lambda clues, nominal, s: s.stiffness * clues.displacement,
+}
+
+
+def force_law_start(clues, force_law, nominal, scales, free=()):
+    """``theta`` of a force law linear in its one parameter, and of the
+    freed nominal parameters, by least squares on the missing force (the
+    restoring-force surface method).
+
+    The missing force along the measured motion is what the effect and the
+    nominal parameters' errors must supply: ``u - m a - c v - k y =
+    t g(y, v) + dm a + dc v + dk y``.  Linear in all of them, so one solve
+    gives a start close to the simulation-error optimum even where that
+    optimum is far from zero (a strong cubic spring that shifts the
+    resonance by half its width: the listed start sits in another basin).
+
+    Parameters
+    ----------
+    clues : DataClues
+    force_law : callable
+        ``force_law(y, v, scales)``: the force of the effect at ``t = 1``.
+    nominal : Oscillator
+    scales : Scales
+    free : sequence of str
+        Nominal parameters refitted with the effect, in the order of their
+        ``theta`` (keys of :data:`LINEAR_COLUMNS`).
+
+    Returns
+    -------
+    theta : ndarray of shape (1 + len(free),) or None
+        None when the missing force cannot be read.
+    """
+    if clues is None or clues.force is None:
+        return None
+    columns = [force_law(clues.displacement, clues.velocity, scales)]
+    columns += [LINEAR_COLUMNS[name](clues, nominal, scales) for name in free]
+    A = np.stack(columns, axis=1)
+    norms = np.linalg.norm(A, axis=0)
+    if np.any(norms == 0):
+        return None
+    return np.linalg.lstsq(A / norms, clues.force, rcond=None)[0] / norms
 
 
 def backlash_start(clues, scales, n_grid=200):

@@ -115,6 +115,8 @@ class Decision:
     reason: str
     noise_source: str = None
     noise_detail: str = ""
+    sensitive_signals: list = field(default_factory=list)
+    recalibrated: dict = field(default_factory=dict)
 
 
 def _db(x):

@@ -17,7 +17,7 @@ from .black_box import branch_opinions, fit_black_box
 from .calibrate import effect_model, fit_effect, meaningful_ftol, with_recalibration
 from .clues import read_clues
 from .decision import decide
-from .effects import Scales, default_effects, make_effect
+from .effects import NOMINAL_PARAMETERS, Scales, default_effects, make_effect, recalibration_effect
 from .noise_floor import estimate_noise, non_excited_noise, repeated_input_noise, residual_noise
 from .report import GapReport
 from .simulate import SignalSet, detect_period, simulate_signals
@@ -45,6 +45,9 @@ def _check_pairs(u_list, y_list, xname, yname):
 
 
 _BLACK_BOX = "__black_box__"
+#: Relative parameter change that tells a chaotic validation response (see
+#: :meth:`GapDiagnosis._sensitive_signals`): far below any estimate's error.
+SENSITIVITY_STEP = 1e-6
 
 
 def _expected_cost(name, effects):
@@ -85,9 +88,17 @@ class GapDiagnosis(BaseEstimator):
         Candidate effects: names from :func:`default_effects` and/or the
         user's own force elements (every parameter of which is fitted from
         its given value).  None: all built-in effects.
-    free_nominal : bool, default=False
-        Refit the nominal mass, damping and stiffness together with each
-        effect (``recalibration`` alone is always a candidate when listed).
+    free_nominal : bool or list of str, default=True
+        Nominal parameters refitted together with every candidate effect:
+        True for all of ``"mass"``, ``"damping"`` and ``"stiffness"``, a list
+        for those only, False for none (the nominal is then taken as exact).
+        A nominal read off measurements is only approximately right, and an
+        effect it lacks is partly absorbed in its linear parameters already
+        (the stiffness of a BLA carries the average hardening of a cubic
+        spring): with those fixed no single effect fits.  The report gives
+        the refitted values beside the effect's.  ``recalibration`` (the
+        freed parameters alone, no new physics) stays a candidate and is
+        preferred when it explains as much.
     oversampling : int, default=20
         Integration rate over ``fs`` of every reported simulation (the
         benchmark's 20); the output is FIR-decimated by its prime factors.
@@ -157,7 +168,7 @@ class GapDiagnosis(BaseEstimator):
         "fs": [Interval(Real, 0, None, closed="neither")],
         "period": [Interval(Integral, 2, None, closed="left"), None],
         "effects": [list, tuple, None],
-        "free_nominal": ["boolean"],
+        "free_nominal": ["boolean", list, tuple],
         "oversampling": [Interval(Integral, 1, None, closed="left")],
         "fit_oversampling": [Interval(Integral, 1, None, closed="left")],
         "black_box": ["boolean"],
@@ -168,7 +179,7 @@ class GapDiagnosis(BaseEstimator):
         "verbose": ["verbose"],
     }
 
-    def __init__(self, nominal, *, fs, period=None, effects=None, free_nominal=False,
+    def __init__(self, nominal, *, fs, period=None, effects=None, free_nominal=True,
                  oversampling=20, fit_oversampling=5, black_box=True, significance=1e-3,
                  max_nfev=20, n_jobs=None, random_state=None, verbose=0):
         self.nominal = nominal
@@ -199,10 +210,21 @@ class GapDiagnosis(BaseEstimator):
             if e.name in seen:
                 raise ValueError(f"effect {e.name!r} is listed twice in effects.")
             seen.add(e.name)
-        if self.free_nominal:
-            recal = make_effect("recalibration")
-            effects = [e if e.is_recalibration else with_recalibration(e, recal) for e in effects]
+        free = self._free_nominal()
+        if free:
+            recal = recalibration_effect(free)
+            effects = [recal if e.is_recalibration else with_recalibration(e, recal) for e in effects]
         return effects
+
+    def _free_nominal(self):
+        """The nominal parameters ``free_nominal`` names, checked."""
+        if isinstance(self.free_nominal, (bool, np.bool_)):
+            return NOMINAL_PARAMETERS if self.free_nominal else ()
+        unknown = [p for p in self.free_nominal if p not in NOMINAL_PARAMETERS]
+        if unknown or not self.free_nominal:
+            raise ValueError(f"free_nominal must be True, False or a non-empty list of {list(NOMINAL_PARAMETERS)}; "
+                             f"got {self.free_nominal!r}.")
+        return tuple(p for p in NOMINAL_PARAMETERS if p in self.free_nominal)
 
     def _log(self, text):
         if self.verbose:
@@ -347,6 +369,43 @@ class GapDiagnosis(BaseEstimator):
         except ValueError:
             return None
 
+    def _sensitive_signals(self, decision, val, y_effects, noise):
+        """Validation signals whose simulation the best candidate cannot pin
+        down: a change of its parameters far below what any data determine
+        (``SENSITIVITY_STEP``, relative) moves it by more than the noise.
+
+        A strongly nonlinear response can be chaotic or sit at a jump
+        (several coexisting steady states): then even the true model with
+        its parameters off by one part in a million simulates another
+        orbit, and simulation error on that signal says nothing about the
+        model.  Such signals are left out of the closure (the report names
+        them); the others decide.
+        """
+        if noise is None or not decision.significant:
+            return []
+        best = next((i for i, f in enumerate(self.fits_) if f.effect.name == decision.ranking[0].name), None)
+        fit = self.fits_[best]
+        if y_effects[best] is None or not fit.effect.n_params:
+            return []
+        theta = fit.theta * (1 + SENSITIVITY_STEP) + SENSITIVITY_STEP
+        try:
+            osc, transform, _ = effect_model(fit.effect, theta, self.nominal, self.scales_)
+            moved = simulate_signals(osc, val, transform)
+        except (ValueError, FloatingPointError):
+            return []
+        return [i for i, (a, b) in enumerate(zip(moved, y_effects[best]))
+                if np.mean((a - b) ** 2) > noise.variance]
+
+    def _recalibrated(self, decision):
+        """Relative change of each freed nominal parameter in the chosen
+        candidate's fit (empty when it is ``recalibration`` itself, whose
+        values are its parameters, or nothing was freed)."""
+        chosen = next((f for f in self.fits_ if f.effect.name == decision.best_effect), None)
+        if chosen is None or chosen.effect.is_recalibration:
+            return {}
+        return {name: float(chosen.physical[name] / getattr(self.nominal, name) - 1)
+                for name in self._free_nominal() if name in chosen.physical and getattr(self.nominal, name)}
+
     def report(self, X_val, y_val):
         """Score the candidates on validation signals and explain the gap.
 
@@ -385,6 +444,17 @@ class GapDiagnosis(BaseEstimator):
             grid = self.period_ or max(u.size for u in self._train[0])
             noise = residual_noise(y_list, y_black_box, grid)
         decision = decide(self.fits_, y_list, y_nominal, y_effects, y_black_box, noise, self.significance)
+        sensitive = self._sensitive_signals(decision, val, y_effects, noise)
+        if sensitive and len(sensitive) < len(u_list):
+            keep = [i for i in range(len(u_list)) if i not in sensitive]
+
+            def pick(signals):
+                return None if signals is None else [signals[i] for i in keep]
+
+            decision = decide(self.fits_, pick(y_list), pick(y_nominal), [pick(y) for y in y_effects],
+                              pick(y_black_box), noise, self.significance)
+            decision.sensitive_signals = sensitive
+        decision.recalibrated = self._recalibrated(decision)
         u_train, y_train = self._train
         where = locate_gap(self.nominal, u_list, y_list, y_nominal, val.n_periods, fs=self.fs,
                            period=self.period_, noise=noise, significance=self.significance,

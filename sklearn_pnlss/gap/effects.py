@@ -24,10 +24,14 @@ from ..physics.forces import (
     QuadraticStiffness,
     StiffnessDrift,
 )
-from .clues import backlash_start
+from .clues import backlash_start, force_law_start
 from .stiffness_start import recalibration_start, second_mode_start
 
-__all__ = ["Scales", "Effect", "default_effects", "make_effect", "BUILT_IN"]
+__all__ = ["Scales", "Effect", "default_effects", "make_effect", "recalibration_effect", "BUILT_IN",
+           "NOMINAL_PARAMETERS"]
+
+#: The nominal oscillator's linear parameters a recalibration may refit.
+NOMINAL_PARAMETERS = ("mass", "damping", "stiffness")
 
 
 @dataclass(frozen=True)
@@ -91,6 +95,12 @@ class Effect:
         ``data_start(clues, nominal, scales, bounds) -> theta or None``: a
         start read from the training data before any fit (see
         :mod:`sklearn_pnlss.gap.clues`).
+    force_law : callable or None
+        ``force_law(y, v, scales)``: the restoring force at ``theta = 1``
+        of an effect that is one stateless force linear in its one
+        parameter (a cubic spring, quadratic damping): its start, alone or
+        with the nominal parameters, is then a least-squares solve on the
+        missing force (:func:`~sklearn_pnlss.gap.clues.force_law_start`).
     """
 
     name: str
@@ -101,6 +111,7 @@ class Effect:
     description: str = ""
     is_recalibration: bool = field(default=False)
     data_start: callable = None
+    force_law: callable = None
 
     def data_starts(self, clues, nominal, scales):
         """Starting points read from the data (empty without clues or a
@@ -201,13 +212,35 @@ def _delay(theta, nominal, s):
     return (), {}, transform, dict(delay_s=tau)
 
 
-def _recalibration(theta, nominal, s):
-    linear = dict(
-        mass=nominal.mass * (1 + theta[0]),
-        damping=nominal.damping + theta[1] * s.force / s.velocity,
-        stiffness=nominal.stiffness + theta[2] * s.stiffness,
-    )
-    return (), linear, None, dict(linear)
+_RECALIBRATED = {
+    # theta -> the refitted value, each on the scale of the data
+    "mass": lambda t, nominal, s: nominal.mass * (1 + t),
+    "damping": lambda t, nominal, s: nominal.damping + t * s.force / s.velocity,
+    "stiffness": lambda t, nominal, s: nominal.stiffness + t * s.stiffness,
+}
+_RECALIBRATION_BOUNDS = {"mass": (-0.9, 10.0), "damping": (-5.0, 5.0), "stiffness": (-5.0, 5.0)}
+
+
+def recalibration_effect(free=NOMINAL_PARAMETERS):
+    """The candidate that refits the nominal parameters named in ``free``
+    (a subset of :data:`NOMINAL_PARAMETERS`) and adds no physics."""
+    free = tuple(name for name in NOMINAL_PARAMETERS if name in free)
+    if not free:
+        raise ValueError(f"free must name at least one of {NOMINAL_PARAMETERS}.")
+
+    def build(theta, nominal, s):
+        linear = {name: _RECALIBRATED[name](t, nominal, s) for name, t in zip(free, theta)}
+        return (), linear, None, dict(linear)
+
+    def data_start(clues, nominal, scales, bounds):
+        if not clues.change:
+            return None
+        full = dict(zip(NOMINAL_PARAMETERS, recalibration_start(clues.change, nominal, scales)))
+        return np.array([full[name] for name in free])
+
+    return Effect("recalibration", free, [np.zeros(len(free))],
+                  _box(*(_RECALIBRATION_BOUNDS[name] for name in free)), build,
+                  "nominal " + ", ".join(free) + " refitted, no new physics", True, data_start)
 
 
 def delay_signal(u, shift, periodic):
@@ -225,6 +258,22 @@ def delay_signal(u, shift, periodic):
 
 def _single(lo, hi, starts=(0.0,)):
     return [np.array([v]) for v in starts], _box((lo, hi))
+
+
+# Force laws at theta = 1 of the effects that are one stateless force linear
+# in one parameter (they match the builders above).
+_FORCE_LAWS = {
+    "cubic_stiffness": lambda y, v, s: s.force * (y / s.displacement) ** 3,
+    "quadratic_stiffness": lambda y, v, s: s.force * (y / s.displacement) ** 2,
+    "coulomb_friction": lambda y, v, s: s.force * np.tanh(v / (0.01 * s.velocity)),
+    "quadratic_damping": lambda y, v, s: s.force * v * np.abs(v) / s.velocity**2,
+}
+
+
+def _force_law_data_start(force_law):
+    def data_start(clues, nominal, scales, bounds):
+        return force_law_start(clues, force_law, nominal, scales)
+    return data_start
 
 
 def _built_in():
@@ -259,12 +308,10 @@ def _built_in():
         "a second mass coupled by a spring and a damper")
     add("stiffness_drift", ("rate",), *_single(-1.0, 1.0), _drift,
         "stiffness changing linearly over time")
-    add("recalibration", ("mass", "damping", "stiffness"), [np.zeros(3)],
-        _box((-0.9, 10.0), (-5.0, 5.0), (-5.0, 5.0)), _recalibration,
-        "nominal mass, damping and stiffness refitted, no new physics")
-    effects["recalibration"].is_recalibration = True
-    effects["recalibration"].data_start = (
-        lambda clues, nominal, scales, bounds: clues.change and recalibration_start(clues.change, nominal, scales))
+    effects["recalibration"] = recalibration_effect()
+    for name, law in _FORCE_LAWS.items():
+        effects[name].force_law = law
+        effects[name].data_start = _force_law_data_start(law)
     effects["second_mode"].data_start = (
         lambda clues, nominal, scales, bounds: clues.change and second_mode_start(clues.change, nominal, bounds))
     effects["backlash"].data_start = lambda clues, nominal, scales, bounds: backlash_start(clues, scales)

@@ -3,7 +3,10 @@ import numpy as np
 
 from .decision import percent
 
-__all__ = ["GapReport"]
+__all__ = ["GapReport", "RECALIBRATION_SHOWN"]
+
+#: Smallest relative change of a freed nominal parameter the verdict names.
+RECALIBRATION_SHOWN = 0.005
 
 
 def _plain(x):
@@ -104,13 +107,14 @@ class GapReport:
             p_value=self.p_value, reason=self.reason, gap_db=self.gap_db,
             per_signal_gap_db=self.decision.per_signal_before_db, noise_floor_db=self.noise_floor_db,
             noise_source=self.noise_source, noise_detail=self.noise_detail,
+            sensitive_signals=self.decision.sensitive_signals, recalibrated=self.decision.recalibrated,
             ranking=[r.to_dict() for r in self.ranking], black_box=self.black_box, where=self.where,
         ))
 
     def __str__(self):
         lines = ["Sim-to-real gap diagnosis", "=" * 25]
         verdict = {None: "no significant gap", "unexplained": "gap not explained by any candidate"}
-        lines.append(f"verdict: {verdict.get(self.best_effect, self.best_effect)}")
+        lines.append(f"verdict: {verdict.get(self.best_effect, self.best_effect)}{self.recalibration_text()}")
         lines.append(f"  {self.reason}")
         if np.isfinite(self.noise_floor_db):
             lines.append(f"nominal gap {self.gap_db:.2f} dB, noise floor {self.noise_floor_db:.2f} dB"
@@ -119,6 +123,11 @@ class GapReport:
             lines.append(f"nominal gap {self.gap_db:.2f} dB, no noise floor")
         # Which estimate set the floor, hence the verdict.
         lines.append(f"  noise: {self.noise_detail}")
+        if self.decision.sensitive_signals:
+            which = ", ".join(str(i) for i in self.decision.sensitive_signals)
+            lines.append(f"  validation signal {which} left out: a one-in-a-million change of the best "
+                         f"candidate's parameters moves its simulation above the noise (a chaotic response "
+                         f"or a jump); no simulator can follow it sample by sample")
         if self.black_box is not None:
             head = f"black box (decoupled PNLSS, {self.black_box['n_params']} parameters): "
             if np.isfinite(self.black_box["gap_after_db"]):
@@ -159,6 +168,17 @@ class GapReport:
                          f"{_number(drift['change_vs_noise_db'][-1], 1)} dB over noise"
                          + (" (drifting)" if drift["drifting"] else ""))
         return "\n".join(lines)
+
+    def recalibration_text(self):
+        """How far the chosen effect's fit moved the freed nominal
+        parameters, e.g. ``", with stiffness recalibrated by -8 %"``
+        (changes under half a percent are not named)."""
+        moved = {k: v for k, v in self.decision.recalibrated.items() if abs(v) >= RECALIBRATION_SHOWN}
+        if not moved:
+            return ""
+        parts = [f"{name} by {100 * v:+.0f} %" if abs(v) >= 0.01 else f"{name} by {100 * v:+.1f} %"
+                 for name, v in moved.items()]
+        return ", with " + parts[0].replace(" by", " recalibrated by") + "".join(f", {p}" for p in parts[1:])
 
     def __repr__(self):
         return f"GapReport(best_effect={self.best_effect!r}, gap_db={self.gap_db:.2f})"

@@ -177,10 +177,11 @@ def missing_force(nominal, u_list, y_list, n_periods, period, fs, f_max):
 
     Returns
     -------
-    y, yd, force : ndarray
-        Displacement, velocity and missing force, all signals concatenated.
+    y, yd, ydd, force : ndarray
+        Displacement, velocity, acceleration and missing force, all signals
+        concatenated.
     """
-    ys, vs, fm = [], [], []
+    ys, vs, acc, fm = [], [], [], []
     for u, y, P in zip(u_list, y_list, n_periods):
         if P:
             u, y = _periods(u, P, period).mean(0), _periods(y, P, period).mean(0)
@@ -191,13 +192,14 @@ def missing_force(nominal, u_list, y_list, n_periods, period, fs, f_max):
         fm.append((u - nominal.mass * a - nominal.restoring_force(yf, v))[trim])
         ys.append(yf[trim])
         vs.append(v[trim])
-    return tuple(map(np.concatenate, (ys, vs, fm)))
+        acc.append(a[trim])
+    return tuple(map(np.concatenate, (ys, vs, acc, fm)))
 
 
 def _force_map(nominal, u_list, y_list, n_periods, period, fs, f_max):
     """Mean missing force (see :func:`missing_force`) over the
     (displacement, velocity) plane; stateful nominal elements are flagged."""
-    y, v, f = missing_force(nominal, u_list, y_list, n_periods, period, fs, f_max)
+    y, v, _, f = missing_force(nominal, u_list, y_list, n_periods, period, fs, f_max)
     y_edges = np.linspace(y.min(), y.max(), MAP_BINS + 1)
     v_edges = np.linspace(v.min(), v.max(), MAP_BINS + 1)
     iy = np.clip(np.searchsorted(y_edges, y, side="right") - 1, 0, MAP_BINS - 1)
