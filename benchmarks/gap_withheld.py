@@ -16,8 +16,16 @@ when the true effect is not a candidate, >= 80 % of the achievable closure
 for the correct effect, under two minutes per diagnosis (4 realisations x 4
 periods of 8192 samples, 2 cores).
 
+Families of data built the way measured data come (issue 16), ``--family``:
+(e) the clean family above; (a) the nominal read off the BLA of the same
+training data; (b) nominal parameters off by 10-30 %; (c) no period repeated
+(one period per signal, zero-input gaps, filtered noise, a growing ramp);
+(d) offsets on both channels and a sensor delay.  Each writes
+``results/gap_withheld_family_<f>.json`` (family e: ``gap_withheld.json``).
+
     python benchmarks/gap_withheld.py            # every case (about an hour)
     python benchmarks/gap_withheld.py --quick    # one seed, one strength
+    python benchmarks/gap_withheld.py --family a --seeds 1 --strengths 1
 """
 import argparse
 import json
@@ -28,7 +36,7 @@ from collections import Counter
 import numpy as np
 from _bench_utils import RESULTS, header
 
-from sklearn_pnlss.gap import GapDiagnosis, default_effects
+from sklearn_pnlss.gap import GapDiagnosis, default_effects, linear_nominal
 from sklearn_pnlss.gap.effects import delay_signal
 from sklearn_pnlss.gap.simulate import SignalSet, simulate_signals
 from sklearn_pnlss.physics import (
@@ -82,47 +90,134 @@ CASES = {
 REMOVED = ["hysteresis", "backlash", "second_mode"]
 
 
-def make_data(truth, seed):
+#: Families of data (issue 16): how measured data come.
+FAMILIES = {
+    "e": "clean: the exact nominal, 4 realisations x 4 steady-state periods",
+    "a": "nominal = the linear oscillator read off the BLA of the same training data (linear_nominal)",
+    "b": "nominal mass, damping and stiffness each off by 10-30 % (random signs)",
+    "c": "no period repeated: one period per signal, realisations separated by zero-input gaps, "
+         "filtered noise, a ramp of growing amplitude (by seed and strength)",
+    "d": "offsets on both channels and a sensor delay (0.5-1.5 samples) on the clean layout",
+}
+LAYOUTS_C = ("single_periods", "zero_gaps", "filtered_noise", "ramp")
+
+
+def _validation(seed):
+    X, _ = multisine(PERIOD, fs=FS, f_band=(5.0, 150.0), rms=50.0, n_periods=1, n_realizations=1,
+                     random_state=10_000 + seed)
+    t = np.arange(30000) / FS
+    return [X[0, :, 0], linear_chirp(t, f_start=10.0, rate=1.5, amplitude=40.0)]
+
+
+def _training_inputs(family, seed, layout):
+    """Training inputs and the period to pass (None: not periodic)."""
+    if family != "c":
+        X, _ = multisine(PERIOD, fs=FS, f_band=(5.0, 150.0), rms=50.0, n_periods=4, n_realizations=4,
+                         random_state=seed)
+        return [x[:, 0] for x in X], PERIOD
+    X, _ = multisine(PERIOD, fs=FS, f_band=(5.0, 150.0), rms=50.0, n_periods=1, n_realizations=4,
+                     random_state=seed)
+    if layout == "single_periods":
+        # steady state, one period each: periodic, but no period repeated
+        return [x[:, 0] for x in X], PERIOD
+    if layout == "zero_gaps":
+        gap = np.zeros(1500)
+        return [np.concatenate([np.concatenate([x[:, 0], gap]) for x in X])], PERIOD
+    rng = np.random.RandomState(seed)
+    if layout == "filtered_noise":
+        from scipy.signal import butter, sosfiltfilt
+        sos = butter(6, [5.0, 150.0], btype="band", fs=FS, output="sos")
+        out = []
+        for _ in range(4):
+            e = sosfiltfilt(sos, rng.standard_normal(PERIOD))
+            out.append(50.0 * e / np.std(e))
+        return out, None
+    # ramp: the four realisations in a row, the amplitude growing from zero
+    # (the mean level is the other families' 50 N rms)
+    u = np.concatenate([x[:, 0] for x in X]) * np.linspace(0.0, 1.0, 4 * PERIOD)
+    return [50.0 * u / np.std(u)], None
+
+
+def _sensor_delay(seed):
+    """Family d's delay of the displacement channel, seconds (0.5, 1 or 1.5 samples)."""
+    return (0.5 + (seed % 3) * 0.5) / FS
+
+
+def _with_sensor_delay(transform, seconds):
+    """The truth's input transform followed by a pure delay: for a
+    time-invariant structure a delay of the measured output is a delay of
+    its input, applied here at the integration rate (exact, where a
+    fractional shift of the decimated record would low-pass it)."""
+    def delayed(u, fs, periodic):
+        return delay_signal(u if transform is None else transform(u, fs, periodic), seconds * fs, periodic)
+    return delayed
+
+
+def _offsets(u_list, y_list):
+    """Family d's channel offsets: 2 N on the force, 0.3 mm on the displacement."""
+    return [u + 2.0 for u in u_list], [y + 3e-4 for y in y_list]
+
+
+def make_data(truth, seed, family="e"):
     forces, linear, transform = truth
     real = NOMINAL.with_forces(forces, **linear)
-    X, _ = multisine(PERIOD, fs=FS, f_band=(5.0, 150.0), rms=50.0, n_periods=4, n_realizations=5,
-                     random_state=seed)
-    u_train = [x[:, 0] for x in X[:4]]
-    t = np.arange(30000) / FS
-    sweep = linear_chirp(t, f_start=10.0, rate=1.5, amplitude=40.0)
-    u_val = [X[4, :PERIOD, 0], sweep]
-    train = SignalSet.from_signals(u_train, PERIOD, FS, OVERSAMPLING)
+    if family == "d":
+        transform = _with_sensor_delay(transform, _sensor_delay(seed))
+    layout = LAYOUTS_C[seed % len(LAYOUTS_C)] if family == "c" else None
+    u_train, period = _training_inputs(family, seed, layout)
+    u_val = _validation(seed)
+    train = SignalSet.from_signals(u_train, period, FS, OVERSAMPLING) if period else \
+        SignalSet(list(u_train), [0] * len(u_train), None, FS, OVERSAMPLING, (2, 2, 5))
     val = SignalSet.from_signals(u_val, PERIOD, FS, OVERSAMPLING)
     rng = np.random.RandomState(seed)
     y_train = simulate_signals(real, train, transform, noise_rms=NOISE, random_state=rng)
     y_val = simulate_signals(real, val, transform, noise_rms=NOISE, random_state=rng)
     y_true = simulate_signals(real, val, transform)  # noiseless: the achievable
-    return u_train, y_train, u_val, y_val, y_true
+    if family == "d":
+        (u_train, y_train), (u_val, y_val) = _offsets(u_train, y_train), _offsets(u_val, y_val)
+    return u_train, y_train, u_val, y_val, y_true, period, layout
 
 
-def run_case(true_name, truth, seed, candidates, expected, n_jobs):
-    u_train, y_train, u_val, y_val, y_true = make_data(truth, seed)
+def _nominal(family, u_train, y_train, period, seed):
+    if family == "a":
+        return linear_nominal(u_train, y_train, fs=FS, period=period, f_band=(5.0, 150.0))
+    if family == "b":
+        rng = np.random.RandomState(1000 + seed)
+        off = rng.uniform(0.1, 0.3, 3) * rng.choice([-1, 1], 3)
+        return Oscillator(M * (1 + off[0]), C * (1 + off[1]), K * (1 + off[2]))
+    return NOMINAL
+
+
+def run_case(true_name, truth, seed, candidates, expected, n_jobs, family="e"):
+    u_train, y_train, u_val, y_val, y_true, period, layout = make_data(truth, seed, family)
+    nominal = _nominal(family, u_train, y_train, period, seed)
     t0 = time.perf_counter()
-    diag = GapDiagnosis(NOMINAL, fs=FS, period=PERIOD, effects=candidates, n_jobs=n_jobs,
+    diag = GapDiagnosis(nominal, fs=FS, period=period, effects=candidates, n_jobs=n_jobs,
                         random_state=seed, verbose=VERBOSE).fit(u_train, y_train)
     report = diag.report(u_val, y_val)
     seconds = time.perf_counter() - t0
     # achievable closure: the true system on the same (noisy) validation
     # data, pooled over the signals in dB as the diagnosis pools closure
     before = 10 ** (np.array(report.decision.per_signal_before_db) / 10)
-    oracle = np.array([np.mean((m - s) ** 2) for m, s in zip(y_val, y_true)])
-    noise = diag.noise_.variance
+    oracle = np.array([np.mean((m - s - np.mean(m - s)) ** 2) for m, s in zip(y_val, y_true)])
+    noise = diag.noise_.variance if diag.noise_ is not None else NOISE**2 / 20
+    if report.decision.sensitive_signals:
+        keep = [i for i in range(len(y_val)) if i not in report.decision.sensitive_signals]
+        oracle = oracle[keep]
     excess = 10 * np.log10(np.maximum(before / noise, 1 + 1e-12))
     left = 10 * np.log10(np.maximum(oracle, noise) / noise)
     achievable = float(np.clip(1 - left.sum() / excess.sum(), -10, 1))
     correct = next((r for r in report.ranking if r.name == true_name), None)
-    row = dict(true=true_name, seed=seed, expected=expected, got=report.best_effect,
-               ok=report.best_effect == expected, seconds=seconds, gap_db=report.gap_db,
-               noise_floor_db=report.noise_floor_db,
+    ok = report.best_effect in (expected if isinstance(expected, tuple) else (expected,))
+    row = dict(family=family, layout=layout, true=true_name, seed=seed, expected=expected, got=report.best_effect,
+               ok=ok, seconds=seconds, gap_db=report.gap_db,
+               nominal=[nominal.mass, nominal.damping, nominal.stiffness],
+               noise_floor_db=report.noise_floor_db, noise_source=report.noise_source,
                black_box_closure=None if report.black_box is None else report.black_box["closure"],
                achievable_closure=achievable,
                correct_closure=None if correct is None else correct.closure,
                closure_vs_achievable=None if correct is None or achievable <= 0 else correct.closure / achievable,
+               recalibrated=report.decision.recalibrated,
                ranking=[(r.name, round(r.gap_after_db, 2), round(r.closure, 3)) for r in report.ranking[:4]],
                reason=report.reason)
     return row
@@ -130,12 +225,12 @@ def run_case(true_name, truth, seed, candidates, expected, n_jobs):
 
 def _summarise(rows):
     confusion = Counter((str(r["expected"]), str(r["got"])) for r in rows)
-    effect_rows = [r for r in rows if r["expected"] not in (None, "unexplained")]
+    effect_rows = [r for r in rows if r["true"] is not None and r["expected"] != "unexplained"]
     accuracy = float(np.mean([r["ok"] for r in effect_rows])) if effect_rows else float("nan")
     ratios = [r["closure_vs_achievable"] for r in effect_rows if r["ok"] and r["closure_vs_achievable"] is not None]
     summary = dict(
         cases=len(rows), effect_accuracy=accuracy,
-        null_false_alarms=sum(1 for r in rows if r["expected"] is None and r["got"] is not None),
+        null_false_alarms=sum(1 for r in rows if r["true"] is None and not r["ok"]),
         unexplained_ok=[r["ok"] for r in rows if r["expected"] == "unexplained"],
         min_closure_vs_achievable=min(ratios) if ratios else None,
         median_seconds=float(np.median([r["seconds"] for r in rows])) if rows else None,
@@ -147,7 +242,7 @@ def _summarise(rows):
 def _merged(rows, args):
     """With --update, the rows of the full results file with these cases
     replaced (a rerun of a few effects after a change)."""
-    path = RESULTS / "gap_withheld.json"
+    path = RESULTS / ("gap_withheld.json" if args.family == "e" else f"gap_withheld_family_{args.family}.json")
     if not args.update or not path.exists():
         return rows
 
@@ -166,7 +261,7 @@ def _write(rows, args):
     out = dict(header(), args=vars(args), summary=summary, rows=rows,
                confusion=[dict(expected=e, got=g, count=n) for (e, g), n in sorted(confusion.items())])
     RESULTS.mkdir(exist_ok=True)
-    name = "gap_withheld_quick" if args.quick else "gap_withheld"
+    name = "gap_withheld" + ("" if args.family == "e" else f"_family_{args.family}") + ("_quick" if args.quick else "")
     if args.only and not args.update:
         name += "_" + "_".join(args.only)
     path = RESULTS / f"{name}.json"
@@ -174,28 +269,44 @@ def _write(rows, args):
     return path, summary, confusion
 
 
+def expected_answer(family, name):
+    """The right answers of a case: the effect, except where the family's
+    nominal already holds it or its data add a measurement delay."""
+    if family == "a" and name in (None, "recalibration"):
+        return (None, "recalibration")  # the BLA nominal is the true linear one, to the noise
+    if family == "b" and name is None:
+        return "recalibration"
+    if family == "d" and name in (None, "recalibration", "input_delay"):
+        return ("input_delay",)  # the sensor delay, named as the channels' delay
+    return name
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--quick", action="store_true", help="one seed and one strength per effect")
     parser.add_argument("--seeds", type=int, default=2)
+    parser.add_argument("--family", default="e", choices=sorted(FAMILIES),
+                        help="; ".join(f"{k}: {v}" for k, v in FAMILIES.items()))
+    parser.add_argument("--strengths", type=int, default=2, help="strengths per effect (1 or 2)")
     parser.add_argument("--only", nargs="*", default=None, help="true effects to run (names, 'null')")
     parser.add_argument("--n-jobs", type=int, default=2)
     parser.add_argument("--verbose", action="store_true")
     parser.add_argument("--update", action="store_true",
-                        help="with --only: replace those cases in results/gap_withheld.json")
+                        help="with --only: replace those cases in the family's results file")
     args = parser.parse_args(argv)
     global VERBOSE
     VERBOSE = int(args.verbose)
     seeds = [0] if args.quick else list(range(args.seeds))
+    n_strengths = 1 if args.quick else args.strengths
     rows = []
     jobs = []
     for name, strengths in CASES.items():
         label = name or "null"
         if args.only and label not in args.only:
             continue
-        for s, truth in enumerate(strengths[:1] if args.quick else strengths):
+        for s, truth in enumerate(strengths[:n_strengths]):
             for seed in seeds:
-                jobs.append((name, truth, 100 * s + seed, None, name))
+                jobs.append((name, truth, 100 * s + seed, None, expected_answer(args.family, name)))
     for name in REMOVED:
         if args.only and f"{name}-removed" not in args.only:
             continue
@@ -203,12 +314,14 @@ def main(argv=None):
         candidates = [e for e in default_effects() if e != name]
         for seed in seeds:
             jobs.append((name, truth, 500 + seed, candidates, "unexplained"))
+    print(f"family {args.family}: {FAMILIES[args.family]}", flush=True)
     for name, truth, seed, candidates, expected in jobs:
-        row = run_case(name, truth, seed, candidates, expected, args.n_jobs)
+        row = run_case(name, truth, seed, candidates, expected, args.n_jobs, args.family)
         rows.append(row)
-        print(f"{str(row['true']):<20} seed {seed:<4} expected {str(expected):<20} got {str(row['got']):<20}"
-              f" {'ok ' if row['ok'] else 'BAD'} {row['seconds']:6.1f} s  gap {row['gap_db']:.1f} dB"
-              f"  closure {row['correct_closure'] if row['correct_closure'] is None else round(row['correct_closure'], 3)}"
+        print(f"{str(row['true']):<20} seed {seed:<4} {str(row['layout'] or ''):<15}expected {str(expected):<20} "
+              f"got {str(row['got']):<20} {'ok ' if row['ok'] else 'BAD'} {row['seconds']:6.1f} s  "
+              f"gap {row['gap_db']:.1f} dB  closure "
+              f"{row['correct_closure'] if row['correct_closure'] is None else round(row['correct_closure'], 3)}"
               f" / achievable {row['achievable_closure']:.3f}", flush=True)
         if not row["ok"]:
             print(f"    {row['reason']}\n    {row['ranking']}", flush=True)

@@ -4,6 +4,7 @@ the gap (see :class:`GapDiagnosis`)."""
 from .decision import RankedEffect
 from .diagnosis import GapDiagnosis
 from .effects import Effect, Scales, default_effects
+from .linear_nominal import linear_nominal
 from .report import GapReport
 
-__all__ = ["GapDiagnosis", "GapReport", "RankedEffect", "Effect", "Scales", "default_effects"]
+__all__ = ["GapDiagnosis", "GapReport", "RankedEffect", "Effect", "Scales", "default_effects", "linear_nominal"]

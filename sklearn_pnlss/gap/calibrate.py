@@ -15,9 +15,9 @@ from scipy.optimize import least_squares
 
 from .clues import force_law_start
 from .effects import Effect
-from .simulate import FIT_MAX_PERIODS, simulate_signals
+from .simulate import FIT_MAX_PERIODS, misfit, simulate_signals
 
-__all__ = ["EffectFit", "with_recalibration", "meaningful_ftol", "fit_effect", "effect_model"]
+__all__ = ["EffectFit", "with_recalibration", "with_delay", "meaningful_ftol", "fit_effect", "effect_model"]
 
 # Residual given to a trial point that diverges or is not physical, relative
 # to the displacement scale: far above any real misfit.
@@ -96,6 +96,32 @@ def with_recalibration(effect, recalibration):
                   effect.description, effect.is_recalibration, data_start, effect.force_law)
 
 
+def with_delay(effect, delay, start):
+    """The effect with a channel delay free too (``delay`` is the
+    ``input_delay`` effect, ``start`` its fitted ``theta``): the delay of
+    the measurement chain is fitted with every candidate once found."""
+    n = effect.bounds[0].size
+
+    def build(theta, nominal, scales):
+        forces, linear, transform, physical = effect.build(theta[:n], nominal, scales)
+        _, _, shift, delay_phys = delay.build(theta[n:], nominal, scales)
+        if transform is None:
+            combined = shift
+        else:
+            def combined(u, fs, periodic):
+                return shift(transform(u, fs, periodic), fs, periodic)
+        return forces, linear, combined, {**physical, **delay_phys}
+
+    def data_start(clues, nominal, scales, bounds):
+        own = effect.data_starts(clues, nominal, scales)
+        return np.append(own[0], start) if own else None
+
+    starts = [np.append(s, start) for s in effect.starts]
+    bounds = (np.append(effect.bounds[0], delay.bounds[0]), np.append(effect.bounds[1], delay.bounds[1]))
+    return Effect(effect.name, effect.param_names + delay.param_names, starts, bounds, build,
+                  effect.description, effect.is_recalibration, data_start, effect.force_law)
+
+
 def effect_model(effect, theta, nominal, scales):
     """The nominal oscillator with the effect added: ``(oscillator,
     input transform, physical parameters)``; raises ValueError when the
@@ -108,8 +134,8 @@ def effect_model(effect, theta, nominal, scales):
 class _Objective:
     """Residuals of one effect on the training set, counting simulations."""
 
-    def __init__(self, effect, nominal, scales, signals, y_meas):
-        self.effect, self.nominal, self.scales = effect, nominal, scales
+    def __init__(self, effect, nominal, scales, signals, y_meas, offsets=False):
+        self.effect, self.nominal, self.scales, self.offsets = effect, nominal, scales, offsets
         self.signals, self.y_meas = signals, y_meas
         self.size = sum(y.size for y in y_meas)
         self.n_evaluations = 0
@@ -121,7 +147,8 @@ class _Objective:
             y_sim = simulate_signals(osc, self.signals, transform, max_periods=FIT_MAX_PERIODS)
         except (ValueError, FloatingPointError, ZeroDivisionError):
             return np.full(self.size, _PENALTY)
-        r = np.concatenate([ys - ym for ys, ym in zip(y_sim, self.y_meas)]) / self.scales.displacement
+        r = np.concatenate([misfit(ys, ym, self.offsets) for ys, ym in zip(y_sim, self.y_meas)])
+        r /= self.scales.displacement
         if not np.all(np.isfinite(r)) or np.max(np.abs(r)) > _PENALTY:
             return np.full(self.size, _PENALTY)
         return r
@@ -176,7 +203,7 @@ def meaningful_ftol(noise, n_samples):
 
 
 def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_signals=None, clues=None,
-               ftol=1e-8):
+               ftol=1e-8, offsets=False):
     """Fit one effect by simulation error.
 
     Parameters
@@ -200,13 +227,16 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
     ftol : float, default=1e-8
         Stop when an iteration lowers the cost by less than this fraction
         (see :func:`meaningful_ftol`).
+    offsets : bool, default=False
+        Grant each signal its best constant output offset (see
+        :func:`~sklearn_pnlss.gap.simulate.misfit`).
 
     Returns
     -------
     EffectFit
     """
     start = time.perf_counter()
-    obj = _Objective(effect, nominal, scales, signals, y_meas)
+    obj = _Objective(effect, nominal, scales, signals, y_meas, offsets)
     lower, upper = effect.bounds
     starts = [np.clip(s, lower, upper) for s in effect.starts] + effect.data_starts(clues, nominal, scales)
     costs = [np.sum(obj(s) ** 2) for s in starts]
@@ -227,13 +257,13 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
             plain = signals.without_correction()
             corrected = signals.with_correction(
                 [f - c for f, c in zip(fine, simulate_signals(osc, plain, transform))])
-            obj = _Objective(effect, nominal, scales, corrected, y_meas)
+            obj = _Objective(effect, nominal, scales, corrected, y_meas, offsets)
             theta, converged, message, _ = _solve(obj, theta, lower, upper, max(3, max_nfev // 4), ftol)
             n_evaluations += obj.n_evaluations + 2
         except (ValueError, FloatingPointError):
             pass  # keep the coarse estimate
         r = obj(theta)
-        fine_obj = _Objective(effect, nominal, scales, fine_signals, y_meas)
+        fine_obj = _Objective(effect, nominal, scales, fine_signals, y_meas, offsets)
         r_fine = fine_obj(theta)
         if np.mean(r_fine**2) > FINE_MISMATCH * np.mean(r**2):
             # The coarse rate's correction no longer holds: a strong

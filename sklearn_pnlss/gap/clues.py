@@ -96,11 +96,13 @@ def force_law_start(clues, force_law, nominal, scales, free=()):
         return None
     columns = [force_law(clues.displacement, clues.velocity, scales)]
     columns += [LINEAR_COLUMNS[name](clues, nominal, scales) for name in free]
+    # and a constant: a static force (a force sensor's offset) is no effect
+    columns.append(np.ones_like(clues.force))
     A = np.stack(columns, axis=1)
     norms = np.linalg.norm(A, axis=0)
     if np.any(norms == 0):
         return None
-    return np.linalg.lstsq(A / norms, clues.force, rcond=None)[0] / norms
+    return (np.linalg.lstsq(A / norms, clues.force, rcond=None)[0] / norms)[:-1]
 
 
 def backlash_start(clues, scales, n_grid=200):

@@ -39,6 +39,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from .noise_floor import gap_test
+from .simulate import misfit
 
 __all__ = ["RankedEffect", "Decision", "decide", "MIN_EXCESS_DB", "EXPLAINED_CLOSURE", "TIE_CLOSURE",
            "BLACK_BOX_MIN_CLOSURE", "NO_FLOOR_DB"]
@@ -123,12 +124,14 @@ def _db(x):
     return float(10 * np.log10(max(x, 1e-300)))
 
 
-def _mse(a, b):
-    return float(np.mean((a - b) ** 2))
+def decide(fits, y_meas, y_nominal, y_effects, y_black_box, noise, significance, offsets=False):
+    """Rank candidates and decide; see the module docstring.  With
+    ``offsets`` every model is granted each signal's best constant offset
+    (see :func:`~sklearn_pnlss.gap.simulate.misfit`)."""
 
+    def _mse(measured, simulated):
+        return float(np.mean(misfit(simulated, measured, offsets) ** 2))
 
-def decide(fits, y_meas, y_nominal, y_effects, y_black_box, noise, significance):
-    """Rank candidates and decide; see the module docstring."""
     before = np.array([_mse(m, s) for m, s in zip(y_meas, y_nominal)])
     sizes = np.array([m.size for m in y_meas])
     noise_var = noise.variance if noise is not None else 0.0

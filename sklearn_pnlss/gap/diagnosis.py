@@ -14,13 +14,13 @@ from ..physics.oscillator import Oscillator
 from ..utils.parameters import Interval, validates_parameters
 from ..utils.validation import as_signal_list, check_period
 from .black_box import branch_opinions, fit_black_box
-from .calibrate import effect_model, fit_effect, meaningful_ftol, with_recalibration
+from .calibrate import effect_model, fit_effect, meaningful_ftol, with_delay, with_recalibration
 from .clues import read_clues
 from .decision import decide
 from .effects import NOMINAL_PARAMETERS, Scales, default_effects, make_effect, recalibration_effect
 from .noise_floor import estimate_noise, non_excited_noise, repeated_input_noise, residual_noise
 from .report import GapReport
-from .simulate import SignalSet, detect_period, simulate_signals
+from .simulate import SignalSet, detect_period, misfit, simulate_signals
 from .where import locate_gap, signal_derivative
 
 __all__ = ["GapDiagnosis"]
@@ -48,6 +48,9 @@ _BLACK_BOX = "__black_box__"
 #: Relative parameter change that tells a chaotic validation response (see
 #: :meth:`GapDiagnosis._sensitive_signals`): far below any estimate's error.
 SENSITIVITY_STEP = 1e-6
+#: Training improvement (dB) of the nominal refit with a channel delay over
+#: the refit alone above which the delay is fitted with every candidate.
+DELAY_FOUND_DB = 1.0
 
 
 def _expected_cost(name, effects):
@@ -99,6 +102,13 @@ class GapDiagnosis(BaseEstimator):
         the refitted values beside the effect's.  ``recalibration`` (the
         freed parameters alone, no new physics) stays a candidate and is
         preferred when it explains as much.
+    offsets : bool, default=True
+        Treat constant offsets of the measured channels as the sensors',
+        not the structure's: each input signal is taken less its mean (a
+        shaker applies no static force; a force cell's zero drifts), and
+        every model, the nominal included, is granted each output signal's
+        best constant offset when fitted and scored.  False when the
+        recorded force has a true static part.
     oversampling : int, default=20
         Integration rate over ``fs`` of every reported simulation (the
         benchmark's 20); the output is FIR-decimated by its prime factors.
@@ -169,6 +179,7 @@ class GapDiagnosis(BaseEstimator):
         "period": [Interval(Integral, 2, None, closed="left"), None],
         "effects": [list, tuple, None],
         "free_nominal": ["boolean", list, tuple],
+        "offsets": ["boolean"],
         "oversampling": [Interval(Integral, 1, None, closed="left")],
         "fit_oversampling": [Interval(Integral, 1, None, closed="left")],
         "black_box": ["boolean"],
@@ -180,13 +191,14 @@ class GapDiagnosis(BaseEstimator):
     }
 
     def __init__(self, nominal, *, fs, period=None, effects=None, free_nominal=True,
-                 oversampling=20, fit_oversampling=5, black_box=True, significance=1e-3,
+                 offsets=True, oversampling=20, fit_oversampling=5, black_box=True, significance=1e-3,
                  max_nfev=20, n_jobs=None, random_state=None, verbose=0):
         self.nominal = nominal
         self.fs = fs
         self.period = period
         self.effects = effects
         self.free_nominal = free_nominal
+        self.offsets = offsets
         self.oversampling = oversampling
         self.fit_oversampling = fit_oversampling
         self.black_box = black_box
@@ -249,6 +261,7 @@ class GapDiagnosis(BaseEstimator):
         self.period_ = check_period(self.period)
         u_list, y_list = _siso(X, "X"), _siso(y, "y")
         _check_pairs(u_list, y_list, "X", "y")
+        u_list = self._inputs(u_list)
         effects = self._candidates()
         if self.period_ is None:
             self._warn_if_periodic(u_list)
@@ -276,37 +289,62 @@ class GapDiagnosis(BaseEstimator):
             self.noise_ = repeated_input_noise(u_list, y_list, self.period, self.fs)
         y_nominal = simulate_signals(self.nominal, train)
         self.train_gap_db_ = float(10 * np.log10(np.mean(np.concatenate(
-            [a - b for a, b in zip(y_nominal, y_list)]) ** 2)))
+            [misfit(a, b, self.offsets) for a, b in zip(y_nominal, y_list)]) ** 2)))
 
-        clues = read_clues(self.nominal, u_list, y_list, y_nominal, train.n_periods, self.period_, self.fs)
+        # The force-law starts read the measured motion, which a sensor's
+        # offset would shift.
+        y_centred = [y - y.mean() for y in y_list] if self.offsets else y_list
+        clues = read_clues(self.nominal, u_list, y_centred, y_nominal, train.n_periods, self.period_, self.fs)
         coarse = train.coarse(self.fit_oversampling, self.nominal)
         self._log(f"fitting {len(effects)} candidates{' and the black box' if self.black_box else ''} "
                   f"on {len(u_list)} signals")
         ftol = meaningful_ftol(self.noise_, y_all.size)
-        tasks = {e.name: delayed(fit_effect)(e, self.nominal, self.scales_, coarse, y_list, max_nfev=self.max_nfev,
-                                             fine_signals=train, clues=clues, ftol=ftol)
-                 for e in effects}
-        if self.black_box:
-            tasks[_BLACK_BOX] = delayed(fit_black_box)(u_list, y_list, self.period, self.random_state, 1)
-        # One pool for the candidates and the black box, the costliest
-        # started first so that the last to finish is a short one.
-        order = sorted(tasks, key=lambda name: -_expected_cost(name, effects))
-        finished = itertools.count(1)
 
-        def announced(name):
+        def fit_task(effect):
+            return delayed(fit_effect)(effect, self.nominal, self.scales_, coarse, y_list, max_nfev=self.max_nfev,
+                                       fine_signals=train, clues=clues, ftol=ftol, offsets=self.offsets)
+
+        finished = itertools.count(1)
+        n_tasks = len(effects) + bool(self.black_box)
+
+        def announced(name, task):
             # Each candidate says when it is done (from its worker thread):
             # the progress of a fit that takes minutes.
-            func, args, kwargs = tasks[name]
+            func, args, kwargs = task
             out = func(*args, **kwargs)
             if self.verbose:
                 what = "the black box" if name == _BLACK_BOX else (
                     f"{name}: training {10 * np.log10(out.train_mse):.2f} dB, {out.n_evaluations} "
                     f"simulations, {out.seconds:.1f} s")
-                self._log(f"{next(finished)}/{len(tasks)} done, {what}")
+                self._log(f"{next(finished)}/{n_tasks} done, {what}")
             return out
 
-        done = dict(zip(order, Parallel(n_jobs=self.n_jobs, prefer="threads")(
-            delayed(announced)(k) for k in order)))
+        def run(tasks):
+            # One pool, the costliest started first so that the last to
+            # finish is a short one.
+            order = sorted(tasks, key=lambda name: -_expected_cost(name, effects))
+            return dict(zip(order, Parallel(n_jobs=self.n_jobs, prefer="threads")(
+                delayed(announced)(k, tasks[k]) for k in order)))
+
+        # First the nominal's own errors: recalibration, and a delay between
+        # the force and displacement channels with it.  A delay found there
+        # is a property of the measurement chain (a sensor, an anti-alias
+        # filter), so every other candidate is fitted with it free too.
+        done, self.delay_ = {}, None
+        first = self._measurement_candidates(effects)
+        if first:
+            done = run({e.name: fit_task(e) for e in first})
+            self.delay_ = self._found_delay(done)
+            if self.delay_ is not None:
+                self._log(f"the data carry a delay of {1e3 * self.delay_['delay_s']:.3g} ms "
+                          f"({self.delay_['gain_db']:.1f} dB better fit); it is fitted with every candidate")
+                effects = [e if e.name in done else with_delay(e, make_effect("input_delay"), self.delay_["theta"])
+                           for e in effects]
+        tasks = {e.name: fit_task(e) for e in effects if e.name not in done}
+        if self.black_box:
+            y_bb = [y - y.mean() for y in y_list] if self.offsets else y_list
+            tasks[_BLACK_BOX] = delayed(fit_black_box)(u_list, y_bb, self.period, self.random_state, 1)
+        done.update(run(tasks))
         self.fits_ = [done[e.name] for e in effects]
         self.black_box_, self.black_box_branches_ = done.get(_BLACK_BOX), []
         if self.black_box_ is not None:
@@ -323,6 +361,28 @@ class GapDiagnosis(BaseEstimator):
         self._train_nominal = y_nominal
         self.fit_time_ = time.perf_counter() - start
         return self
+
+    def _inputs(self, u_list):
+        """The input signals, less their means with ``offsets``."""
+        return [u - u.mean() for u in u_list] if self.offsets else u_list
+
+    def _measurement_candidates(self, effects):
+        """``recalibration`` and ``input_delay`` when both are candidates
+        and the nominal is freed (they are then nested: the delay at zero is
+        the recalibration)."""
+        by_name = {e.name: e for e in effects}
+        if not self._free_nominal() or "recalibration" not in by_name or "input_delay" not in by_name:
+            return []
+        return [by_name["recalibration"], by_name["input_delay"]]
+
+    def _found_delay(self, done):
+        """The channel delay the training data show, or None: the nominal
+        refit with a delay must beat the refit alone by ``DELAY_FOUND_DB``."""
+        recal, delay = done["recalibration"], done["input_delay"]
+        gain_db = 10 * np.log10(recal.train_mse / delay.train_mse)
+        if gain_db < DELAY_FOUND_DB:
+            return None
+        return dict(theta=float(delay.theta[0]), delay_s=float(delay.physical["delay_s"]), gain_db=float(gain_db))
 
     def _warn_if_periodic(self, u_list):
         """Warn when the training inputs repeat themselves and no period was
@@ -403,8 +463,11 @@ class GapDiagnosis(BaseEstimator):
         chosen = next((f for f in self.fits_ if f.effect.name == decision.best_effect), None)
         if chosen is None or chosen.effect.is_recalibration:
             return {}
-        return {name: float(chosen.physical[name] / getattr(self.nominal, name) - 1)
-                for name in self._free_nominal() if name in chosen.physical and getattr(self.nominal, name)}
+        moved = {name: float(chosen.physical[name] / getattr(self.nominal, name) - 1)
+                 for name in self._free_nominal() if name in chosen.physical and getattr(self.nominal, name)}
+        if self.delay_ is not None and chosen.effect.name != "input_delay":
+            moved["delay_s"] = float(chosen.physical["delay_s"])  # seconds, not relative
+        return moved
 
     def report(self, X_val, y_val):
         """Score the candidates on validation signals and explain the gap.
@@ -422,6 +485,7 @@ class GapDiagnosis(BaseEstimator):
         check_is_fitted(self, "fits_")
         u_list, y_list = _siso(X_val, "X_val"), _siso(y_val, "y_val")
         _check_pairs(u_list, y_list, "X_val", "y_val")
+        u_list = self._inputs(u_list)
         val = self._signal_set(u_list)
         y_nominal = simulate_signals(self.nominal, val)
 
@@ -443,7 +507,8 @@ class GapDiagnosis(BaseEstimator):
             # on these signals is the yardstick.
             grid = self.period_ or max(u.size for u in self._train[0])
             noise = residual_noise(y_list, y_black_box, grid)
-        decision = decide(self.fits_, y_list, y_nominal, y_effects, y_black_box, noise, self.significance)
+        decision = decide(self.fits_, y_list, y_nominal, y_effects, y_black_box, noise, self.significance,
+                          self.offsets)
         sensitive = self._sensitive_signals(decision, val, y_effects, noise)
         if sensitive and len(sensitive) < len(u_list):
             keep = [i for i in range(len(u_list)) if i not in sensitive]
@@ -452,7 +517,7 @@ class GapDiagnosis(BaseEstimator):
                 return None if signals is None else [signals[i] for i in keep]
 
             decision = decide(self.fits_, pick(y_list), pick(y_nominal), [pick(y) for y in y_effects],
-                              pick(y_black_box), noise, self.significance)
+                              pick(y_black_box), noise, self.significance, self.offsets)
             decision.sensitive_signals = sensitive
         decision.recalibrated = self._recalibrated(decision)
         u_train, y_train = self._train

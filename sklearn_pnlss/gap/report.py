@@ -173,12 +173,15 @@ class GapReport:
         """How far the chosen effect's fit moved the freed nominal
         parameters, e.g. ``", with stiffness recalibrated by -8 %"``
         (changes under half a percent are not named)."""
-        moved = {k: v for k, v in self.decision.recalibrated.items() if abs(v) >= RECALIBRATION_SHOWN}
-        if not moved:
-            return ""
+        moved = {k: v for k, v in self.decision.recalibrated.items()
+                 if k != "delay_s" and abs(v) >= RECALIBRATION_SHOWN}
         parts = [f"{name} by {100 * v:+.0f} %" if abs(v) >= 0.01 else f"{name} by {100 * v:+.1f} %"
                  for name, v in moved.items()]
-        return ", with " + parts[0].replace(" by", " recalibrated by") + "".join(f", {p}" for p in parts[1:])
+        if parts:
+            parts[0] = parts[0].replace(" by", " recalibrated by")
+        if "delay_s" in self.decision.recalibrated:  # the measurement chain's, fitted with the effect
+            parts.append(f"a channel delay of {1e3 * self.decision.recalibrated['delay_s']:.3g} ms")
+        return ", with " + ", ".join(parts) if parts else ""
 
     def __repr__(self):
         return f"GapReport(best_effect={self.best_effect!r}, gap_db={self.gap_db:.2f})"

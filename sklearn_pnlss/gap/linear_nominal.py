@@ -1,0 +1,92 @@
+"""A linear oscillator read off measured data: the nominal an engineer
+builds from the best linear approximation (mass, damping and stiffness from
+the resonance, its width and the static gain)."""
+import numpy as np
+
+from ..frequency.bla import welch_bla
+from ..physics.oscillator import Oscillator
+from ..utils.validation import as_signal_list, check_period, is_periodic
+
+__all__ = ["linear_nominal"]
+
+#: Segment length of the Welch estimate for data without a period.
+WELCH_SEGMENT = 4096
+
+
+def _frf(u_list, y_list, period):
+    """Lines (cycles per record) and FRF of the data: the period-averaged
+    spectra of steady-state signals, pooled over them (H1), or Welch's H1."""
+    periodic = period is not None and all(is_periodic(u.size, period) for u in u_list)
+    if not periodic:
+        n = min(WELCH_SEGMENT, 2 ** int(np.log2(min(u.size for u in u_list))))
+        lines, frf, _ = welch_bla([u[:, None] for u in u_list], [y[:, None] for y in y_list], n)
+        return lines, frf[:, 0, 0], n
+    U = np.array([np.fft.rfft(u.reshape(-1, period).mean(0)) for u in u_list])
+    Y = np.array([np.fft.rfft(y.reshape(-1, period).mean(0)) for y in y_list])
+    power = np.sum(np.abs(U) ** 2, axis=0)
+    lines = np.flatnonzero(power > 1e-6 * power.max())
+    lines = lines[lines > 0]
+    return lines, np.sum(Y[:, lines] * U[:, lines].conj(), 0) / power[lines], period
+
+
+def linear_nominal(X, y, *, fs, period=None, f_band=None):
+    """The linear oscillator ``m ydd + c yd + k y = u`` closest to the
+    measured frequency response.
+
+    The FRF is the best linear approximation of the data (period-averaged
+    H1 of steady-state periodic signals, else Welch's H1); ``m``, ``c`` and
+    ``k`` minimise the relative FRF error, a linear least-squares problem
+    in the dynamic stiffness ``k - m w^2 + i c w``.  On a nonlinear
+    structure this is the nominal an engineer reads off a test: it carries
+    the average effect of the nonlinearity at the test level (a hardening
+    spring raises ``k``), which is why :class:`GapDiagnosis` refits it with
+    every candidate.
+
+    Parameters
+    ----------
+    X, y : signals as in :meth:`GapDiagnosis.fit`
+        Measured force and displacement.
+    fs : float
+        Sampling rate, Hz.
+    period : int, default=None
+        Samples per period when every signal is a whole number of
+        steady-state periods.
+    f_band : (float, float), default=None
+        Band of the fit, Hz; None: every line the input excites.
+
+    Returns
+    -------
+    Oscillator
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sklearn_pnlss.gap.linear_nominal import linear_nominal
+    >>> from sklearn_pnlss.physics import Oscillator
+    >>> from sklearn_pnlss.signals import multisine
+    >>> X, _ = multisine(1024, fs=750.0, rms=10.0, n_periods=2, random_state=0)
+    >>> y = Oscillator(2.0, 10.0, 5e4).simulate(X[0, :, 0], fs=750.0, periodic=True)
+    >>> osc = linear_nominal(X, y[None, :, None], fs=750.0, period=1024)
+    >>> [round(float(v), 2) for v in (osc.mass, osc.damping, osc.stiffness / 1e4)]
+    [2.0, 10.0, 5.0]
+    """
+    period = check_period(period)
+    u_list = [s[:, 0] for s in as_signal_list(X, name="X", min_samples=16)[0]]
+    y_list = [s[:, 0] for s in as_signal_list(y, name="y", min_samples=16)[0]]
+    if len(u_list) != len(y_list) or any(u.size != v.size for u, v in zip(u_list, y_list)):
+        raise ValueError("X and y must hold the same number of signals of the same lengths.")
+    lines, G, n = _frf(u_list, y_list, period)
+    w = 2 * np.pi * lines * fs / n
+    if f_band is not None:
+        keep = (w >= 2 * np.pi * f_band[0]) & (w <= 2 * np.pi * f_band[1])
+        w, G = w[keep], G[keep]
+    if w.size < 3:
+        raise ValueError("fewer than 3 excited lines in f_band: widen f_band or excite the band.")
+    # (k - m w^2 + i c w) G = 1, in k, m, c: relative FRF error
+    A = np.stack([G, -w**2 * G, 1j * w * G], axis=1)
+    k, m, c = np.linalg.lstsq(np.vstack([A.real, A.imag]), np.concatenate([np.ones(w.size), np.zeros(w.size)]),
+                              rcond=None)[0]
+    if min(k, m, c) <= 0:
+        raise ValueError(f"the measured FRF is not that of a damped oscillator (m = {m:.3g}, c = {c:.3g}, "
+                         f"k = {k:.3g}): check the channels, or give the band of the first mode as f_band.")
+    return Oscillator(float(m), float(c), float(k))
