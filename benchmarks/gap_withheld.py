@@ -262,7 +262,7 @@ def _write(rows, args):
                confusion=[dict(expected=e, got=g, count=n) for (e, g), n in sorted(confusion.items())])
     RESULTS.mkdir(exist_ok=True)
     name = "gap_withheld" + ("" if args.family == "e" else f"_family_{args.family}") + ("_quick" if args.quick else "")
-    if args.only and not args.update:
+    if args.only and not args.update and len(args.only) < 4:
         name += "_" + "_".join(args.only)
     path = RESULTS / f"{name}.json"
     path.write_text(json.dumps(out, indent=1, default=str))
@@ -289,6 +289,8 @@ def main(argv=None):
                         help="; ".join(f"{k}: {v}" for k, v in FAMILIES.items()))
     parser.add_argument("--strengths", type=int, default=2, help="strengths per effect (1 or 2)")
     parser.add_argument("--only", nargs="*", default=None, help="true effects to run (names, 'null')")
+    parser.add_argument("--no-removed", action="store_true",
+                        help="skip the cases whose true effect is removed from the candidates")
     parser.add_argument("--n-jobs", type=int, default=2)
     parser.add_argument("--verbose", action="store_true")
     parser.add_argument("--update", action="store_true",
@@ -307,7 +309,7 @@ def main(argv=None):
         for s, truth in enumerate(strengths[:n_strengths]):
             for seed in seeds:
                 jobs.append((name, truth, 100 * s + seed, None, expected_answer(args.family, name)))
-    for name in REMOVED:
+    for name in [] if args.no_removed else REMOVED:
         if args.only and f"{name}-removed" not in args.only:
             continue
         truth = CASES[name][1]
