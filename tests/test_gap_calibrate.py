@@ -92,9 +92,10 @@ def test_effect_with_free_nominal_recovers_both(train):
 
 
 def test_free_nominal_splits_theta_by_the_fitted_parameters():
-    """Hysteresis reports four parameters but fits three (beta is fixed to
-    1 / Y): with the nominal free, theta's last three entries are still
-    the mass, damping and stiffness changes."""
+    """Hysteresis fits three parameters (beta is fixed to 1 / Y) and
+    reports alpha and the products beta*gamma, beta*delta: with the nominal
+    free, theta's last three entries are the mass, damping and stiffness
+    changes."""
     scales = Scales(force=50.0, displacement=1e-3, velocity=0.1, duration=3.0, u_peak=150.0, fs=FS)
     effect = with_recalibration(make_effect("hysteresis"), make_effect("recalibration"))
     assert effect.bounds[0].size == 6
@@ -103,6 +104,7 @@ def test_free_nominal_splits_theta_by_the_fitted_parameters():
     assert osc.forces == (BoucWen(0.3 * 5e4, 1e3, 0.5, -0.5, 1.0),)
     assert (osc.mass, osc.damping, osc.stiffness) == pytest.approx((2.2, 10.0 + 0.2 * 500.0, 5e4 + 0.3 * 5e4))
     assert physical["alpha"] == pytest.approx(1.5e4) and physical["stiffness"] == pytest.approx(6.5e4)
+    assert physical["beta_gamma"] == pytest.approx(500.0) and physical["beta_delta"] == pytest.approx(-500.0)
 
 
 def test_input_delay_is_recovered(train):

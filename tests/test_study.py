@@ -126,7 +126,7 @@ def _gap_guide_shows_this_report(printed, saved):
     # The prose under the report.
     ranking = {row["name"]: row for row in saved["ranking"]}
     p = ranking["hysteresis"]["params"]
-    products = {"alpha": p["alpha"], "beta*gamma": p["beta"] * p["gamma"], "beta*delta": p["beta"] * p["delta"]}
+    products = {"alpha": p["alpha"], "beta*gamma": p["beta_gamma"], "beta*delta": p["beta_delta"]}
     prose = " ".join(section.split())
     assert f"\\alpha = {products['alpha'] / 1e4:.3f} \\cdot 10^4" in prose
     assert f"\\beta\\gamma = {products['beta*gamma']:.0f}` and :math:`\\beta\\delta = {products['beta*delta']:.0f}`" in prose

@@ -67,7 +67,7 @@ def with_recalibration(effect, recalibration):
     report reads the recalibrated values beside the effect's.
     """
     # Split theta by the effect's own fitted parameters (its bounds), not by
-    # the parameters it reports: hysteresis reports beta, which is fixed.
+    # the parameters it reports: an effect may report more or fewer.
     n = effect.bounds[0].size
     free = recalibration.param_names
 

@@ -140,11 +140,12 @@ def _no_input(forces, physical, linear=None):
 # -- built-in effects -----------------------------------------------------------
 def _hysteresis(theta, nominal, s):
     # Bouc-Wen with nu = 1: only beta*gamma and beta*delta matter, so beta is
-    # fixed to 1 / Y and gamma, delta carry the shape.
+    # fixed to 1 / Y, gamma and delta carry the shape, and the products are
+    # what is reported (beta alone is an arbitrary choice).
     alpha = theta[0] * s.stiffness
     beta = 1.0 / s.displacement
     el = BoucWen(alpha, beta, theta[1], theta[2], 1.0)
-    return _no_input([el], dict(alpha=alpha, beta=beta, gamma=theta[1], delta=theta[2]))
+    return _no_input([el], dict(alpha=alpha, beta_gamma=beta * theta[1], beta_delta=beta * theta[2]))
 
 
 def _cubic(theta, nominal, s):
@@ -283,7 +284,7 @@ def _built_in():
         effects[name] = Effect(name, tuple(params), [np.asarray(s, float) for s in starts], bounds, build,
                                description)
 
-    add("hysteresis", ("alpha", "beta", "gamma", "delta"),
+    add("hysteresis", ("alpha", "beta_gamma", "beta_delta"),
         [[0.3, 0.5, 0.0], [0.3, 0.5, -0.5], [1.0, 0.5, -0.7]],
         _box((0.0, 10.0), (-5.0, 5.0), (-5.0, 5.0)), _hysteresis,
         "Bouc-Wen hysteretic force (nu = 1)")
