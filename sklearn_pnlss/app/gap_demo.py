@@ -69,6 +69,6 @@ def run_gap_demo(out_dir=None, *, n_samples=2048, n_realizations=2, n_periods=2,
             import matplotlib.pyplot as plt
 
             fig = report.plot()
-            fig.savefig(out / "gap_report.png", dpi=110)
+            fig.savefig(out / "gap_report.png", dpi=110, bbox_inches="tight")
             plt.close(fig)
     return report, float(np.round(seconds, 2))

@@ -56,7 +56,7 @@ def branch_opinions(model, u_list, y_list, velocity_list, scales):
         in the branch input, summing to 1), ``odd_share`` (share of the
         nonlinear part that is odd), ``sharpness`` (share of the nonlinear
         part above degree 3), ``nonlinear_share`` (nonlinear part over the
-        whole branch output) and a one-line ``reading``.
+        whole branch output), a one-line ``reading`` and its short ``label``.
     """
     X = [u[:, None] for u in u_list]
     z_list = model.branch_inputs(X)
@@ -93,5 +93,6 @@ def branch_opinions(model, u_list, y_list, velocity_list, scales):
             acts_on=dict(zip(names, map(float, share))), odd_share=odd_share, sharpness=sharpness,
             nonlinear_share=nl_share, z=z_grid[:, b], g=g_grid[:, b],
             reading=f"{kind}, {shape} nonlinearity mostly of the {main} ({100 * share.max():.0f} %)",
+            label=f"{kind}, {shape}, {main}",  # the reading, short enough for a legend
         ))
     return opinions

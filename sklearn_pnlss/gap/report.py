@@ -294,7 +294,7 @@ class GapReport:
             ax.text(0.5, 0.5, "no black box", ha="center", transform=ax.transAxes)
             return
         for i, b in enumerate(self.black_box["branches"]):
-            ax.plot(b["z"], b["g"], label=f"{i + 1}: {b['reading'][:30]}")
+            ax.plot(b["z"], b["g"], label=f"{i + 1}: {b['label']}")
         ax.set_xlabel("branch input z")
         ax.set_ylabel("g(z)")
         ax.legend(fontsize="x-small")
