@@ -37,8 +37,8 @@ import numpy as np
 from _bench_utils import RESULTS, header
 
 from sklearn_pnlss.gap import GapDiagnosis, default_effects, linear_nominal
-from sklearn_pnlss.gap.effects import delay_signal
-from sklearn_pnlss.gap.simulate import SignalSet, simulate_signals
+from sklearn_pnlss.gap.candidates.effects import delay_signal
+from sklearn_pnlss.gap.fitting.simulate import SignalSet, simulate_signals
 from sklearn_pnlss.physics import (
     BoucWen,
     CoulombFriction,

@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 
 from sklearn_pnlss.gap import GapDiagnosis, default_effects
-from sklearn_pnlss.gap.clues import DataClues, read_clues
-from sklearn_pnlss.gap.effects import Scales, make_effect
-from sklearn_pnlss.gap.stiffness_start import measured_stiffness_change, recalibration_start
-from sklearn_pnlss.gap.noise_floor import drift_free_variance
-from sklearn_pnlss.gap.simulate import SignalSet, detect_period, prime_factors, simulate_signals
+from sklearn_pnlss.gap.candidates.clues import DataClues, read_clues
+from sklearn_pnlss.gap.candidates.effects import Scales, make_effect
+from sklearn_pnlss.gap.candidates.stiffness_start import measured_stiffness_change, recalibration_start
+from sklearn_pnlss.gap.verdict.noise_floor import drift_free_variance
+from sklearn_pnlss.gap.fitting.simulate import SignalSet, detect_period, prime_factors, simulate_signals
 from sklearn_pnlss.physics import (
     CoupledMass,
     CubicStiffness,

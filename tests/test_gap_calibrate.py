@@ -1,12 +1,12 @@
-"""Fitting an effect by simulation error (sklearn_pnlss.gap.calibrate):
+"""Fitting an effect by simulation error (sklearn_pnlss.gap.fitting.calibrate):
 known parameters of simulated oscillators are recovered."""
 import numpy as np
 import pytest
 
-from sklearn_pnlss.gap.calibrate import effect_model, fit_effect, meaningful_ftol, with_recalibration
-from sklearn_pnlss.gap.effects import Effect, Scales, delay_signal, make_effect
-from sklearn_pnlss.gap.noise_floor import NoiseFloor
-from sklearn_pnlss.gap.simulate import SignalSet, simulate_signals
+from sklearn_pnlss.gap.fitting.calibrate import effect_model, fit_effect, meaningful_ftol, with_recalibration
+from sklearn_pnlss.gap.candidates.effects import Effect, Scales, delay_signal, make_effect
+from sklearn_pnlss.gap.verdict.noise_floor import NoiseFloor
+from sklearn_pnlss.gap.fitting.simulate import SignalSet, simulate_signals
 from sklearn_pnlss.physics import BoucWen, CubicStiffness, Oscillator
 from sklearn_pnlss.signals import multisine
 

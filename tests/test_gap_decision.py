@@ -1,14 +1,14 @@
-"""The verdict of the gap diagnosis (sklearn_pnlss.gap.decision) on
+"""The verdict of the gap diagnosis (sklearn_pnlss.gap.verdict.decision) on
 constructed evidence: validation errors of chosen mean square, so that
 every closure, p-value and choice is known in advance."""
 import numpy as np
 import pytest
 from scipy import stats
 
-from sklearn_pnlss.gap.calibrate import EffectFit
-from sklearn_pnlss.gap.decision import EXPLAINED_CLOSURE, MIN_EXCESS_DB, TIE_CLOSURE, decide
-from sklearn_pnlss.gap.effects import Effect
-from sklearn_pnlss.gap.noise_floor import NoiseFloor, gap_test
+from sklearn_pnlss.gap.fitting.calibrate import EffectFit
+from sklearn_pnlss.gap.verdict.decision import EXPLAINED_CLOSURE, MIN_EXCESS_DB, TIE_CLOSURE, decide
+from sklearn_pnlss.gap.candidates.effects import Effect
+from sklearn_pnlss.gap.verdict.noise_floor import NoiseFloor, gap_test
 
 S2 = 1e-12  # noise variance, m^2
 NOISE = NoiseFloor(variance=S2, spectrum=np.full(513, S2), dof_per_sample=1.0)

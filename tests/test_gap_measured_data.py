@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 
 from sklearn_pnlss.gap import GapDiagnosis, linear_nominal
-from sklearn_pnlss.gap.calibrate import with_recalibration
-from sklearn_pnlss.gap.clues import force_law_start, read_clues
-from sklearn_pnlss.gap.effects import Scales, delay_signal, make_effect, recalibration_effect
+from sklearn_pnlss.gap.fitting.calibrate import with_recalibration
+from sklearn_pnlss.gap.candidates.clues import force_law_start, read_clues
+from sklearn_pnlss.gap.candidates.effects import Scales, delay_signal, make_effect, recalibration_effect
 from sklearn_pnlss.gap.report import GapReport
-from sklearn_pnlss.gap.simulate import SignalSet, misfit, simulate_signals
+from sklearn_pnlss.gap.fitting.simulate import SignalSet, misfit, simulate_signals
 from sklearn_pnlss.physics import CubicStiffness, Oscillator
 from sklearn_pnlss.signals import linear_chirp, multisine
 

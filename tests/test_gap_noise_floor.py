@@ -1,5 +1,5 @@
 """The noise floor of the gap diagnosis when no period repeats
-(sklearn_pnlss.gap.noise_floor), and the verdict it sets.
+(sklearn_pnlss.gap.verdict.noise_floor), and the verdict it sets.
 
 Issue 16, item 3: nominal + ``CubicStiffness(-1e8)``, one period per
 training signal.  The cubic term takes the error from about -62 dB down to
@@ -11,17 +11,17 @@ import numpy as np
 import pytest
 
 from sklearn_pnlss.gap import GapDiagnosis
-from sklearn_pnlss.gap.calibrate import EffectFit
-from sklearn_pnlss.gap.decision import BLACK_BOX_MIN_CLOSURE, EXPLAINED_CLOSURE, decide
-from sklearn_pnlss.gap.effects import Effect
-from sklearn_pnlss.gap.noise_floor import (
+from sklearn_pnlss.gap.fitting.calibrate import EffectFit
+from sklearn_pnlss.gap.verdict.decision import BLACK_BOX_MIN_CLOSURE, EXPLAINED_CLOSURE, decide
+from sklearn_pnlss.gap.candidates.effects import Effect
+from sklearn_pnlss.gap.verdict.noise_floor import (
     NoiseFloor,
     estimate_noise,
     non_excited_noise,
     repeated_input_noise,
     residual_noise,
 )
-from sklearn_pnlss.gap.simulate import SignalSet, simulate_signals
+from sklearn_pnlss.gap.fitting.simulate import SignalSet, simulate_signals
 from sklearn_pnlss.physics import CubicStiffness, Oscillator
 from sklearn_pnlss.signals import linear_chirp, multisine
 

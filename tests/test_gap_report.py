@@ -4,10 +4,10 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from sklearn_pnlss.gap.calibrate import EffectFit
-from sklearn_pnlss.gap.decision import decide, percent
-from sklearn_pnlss.gap.effects import Effect
-from sklearn_pnlss.gap.noise_floor import NoiseFloor
+from sklearn_pnlss.gap.fitting.calibrate import EffectFit
+from sklearn_pnlss.gap.verdict.decision import decide, percent
+from sklearn_pnlss.gap.candidates.effects import Effect
+from sklearn_pnlss.gap.verdict.noise_floor import NoiseFloor
 from sklearn_pnlss.gap.report import GapReport
 
 S2 = 1e-12

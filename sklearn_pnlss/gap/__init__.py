@@ -1,9 +1,9 @@
 """Sim-to-real gap diagnosis: where a physical simulator misses the
 measurements, which unmodelled effect causes it, how far adding it shrinks
 the gap (see :class:`GapDiagnosis`)."""
-from .decision import RankedEffect
+from .verdict.decision import RankedEffect
 from .diagnosis import GapDiagnosis
-from .effects import Effect, Scales, default_effects
+from .candidates.effects import Effect, Scales, default_effects
 from .linear_nominal import linear_nominal
 from .report import GapReport
 

@@ -13,14 +13,14 @@ from sklearn.utils.validation import check_is_fitted
 from ..physics.oscillator import Oscillator
 from ..utils.parameters import Interval, validates_parameters
 from ..utils.validation import as_signal_list, check_period
-from .black_box import branch_opinions, fit_black_box
-from .calibrate import effect_model, fit_effect, meaningful_ftol, with_delay, with_recalibration
-from .clues import read_clues
-from .decision import decide
-from .effects import NOMINAL_PARAMETERS, Scales, default_effects, make_effect, recalibration_effect
-from .noise_floor import estimate_noise, non_excited_noise, repeated_input_noise, residual_noise
+from .fitting.black_box import branch_opinions, fit_black_box
+from .fitting.calibrate import effect_model, fit_effect, meaningful_ftol, with_delay, with_recalibration
+from .candidates.clues import read_clues
+from .verdict.decision import decide
+from .candidates.effects import NOMINAL_PARAMETERS, Scales, default_effects, make_effect, recalibration_effect
+from .verdict.noise_floor import estimate_noise, non_excited_noise, repeated_input_noise, residual_noise
 from .report import GapReport
-from .simulate import SignalSet, detect_period, misfit, simulate_signals
+from .fitting.simulate import SignalSet, detect_period, misfit, simulate_signals
 from .where import locate_gap, signal_derivative
 
 __all__ = ["GapDiagnosis"]
@@ -86,7 +86,7 @@ class GapDiagnosis(BaseEstimator):
         periodically); any other signal starts from rest.  Periodic signals
         of two periods or more give the noise floor; without them it is
         read from repeated inputs or from the lines the input does not
-        excite (see :mod:`sklearn_pnlss.gap.noise_floor`).
+        excite (see :mod:`sklearn_pnlss.gap.verdict.noise_floor`).
     effects : list of str or ForceElement, default=None
         Candidate effects: names from :func:`default_effects` and/or the
         user's own force elements (every parameter of which is fitted from
@@ -148,7 +148,7 @@ class GapDiagnosis(BaseEstimator):
     black_box_ : DecoupledPNLSSRegressor or None
     black_box_branches_ : list of dict
         Reading of each black-box branch on the training signals (see
-        :func:`sklearn_pnlss.gap.black_box.branch_opinions`).
+        :func:`sklearn_pnlss.gap.fitting.black_box.branch_opinions`).
     train_gap_db_ : float
         Mean square training gap of the nominal simulator, dB.
     fit_time_ : float
@@ -405,7 +405,7 @@ class GapDiagnosis(BaseEstimator):
     def _model_noise_floor(self, train, u_list, y_list, y_nominal):
         """Noise floor from the residuals of the nominal, the fitted
         candidates and the black box at the lines the training inputs do
-        not excite (see :func:`~sklearn_pnlss.gap.noise_floor.non_excited_noise`):
+        not excite (see :func:`~sklearn_pnlss.gap.verdict.noise_floor.non_excited_noise`):
         the floor of data that repeat no period."""
         def simulate_fit(fit):
             osc, transform, _ = effect_model(fit.effect, fit.theta, self.nominal, self.scales_)

@@ -1,7 +1,7 @@
 """The diagnosis report: verdict, ranking, where the gap lies, figures."""
 import numpy as np
 
-from .decision import percent
+from .verdict.decision import percent
 
 __all__ = ["GapReport", "RECALIBRATION_SHOWN"]
 
@@ -64,7 +64,7 @@ class GapReport:
         Which estimate set the noise floor (``"periods"``,
         ``"repeated_inputs"``, ``"non_excited_lines"``,
         ``"black_box_residual"``; None: no floor), see
-        :mod:`sklearn_pnlss.gap.noise_floor`.
+        :mod:`sklearn_pnlss.gap.verdict.noise_floor`.
     noise_detail : str
         What that estimate was read from, in a sentence.
     black_box : dict or None

@@ -267,14 +267,14 @@ def locate_gap(nominal, u_list, y_list, y_nominal, n_periods, *, fs, period, noi
         The nominal simulation of each validation signal.
     n_periods : list of int
         Steady-state periods of each validation signal (0: from rest), as
-        in :class:`~sklearn_pnlss.gap.simulate.SignalSet`.
+        in :class:`~sklearn_pnlss.gap.fitting.simulate.SignalSet`.
     fs : float
         Sampling rate, Hz.
     period : int or None
         Samples per period of the periodic signals.
     noise : NoiseFloor or None
         Noise floor of the training periods (see
-        :func:`~sklearn_pnlss.gap.noise_floor.estimate_noise`); without it there
+        :func:`~sklearn_pnlss.gap.verdict.noise_floor.estimate_noise`); without it there
         is no frequency analysis and no drift reading.
     significance : float
         Level of the per-line test of the gap against the noise floor

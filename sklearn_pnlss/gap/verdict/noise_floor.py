@@ -34,8 +34,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-from ..frequency.noise import periodic_noise_variance
-from ..utils.validation import is_periodic
+from ...frequency.noise import periodic_noise_variance
+from ...utils.validation import is_periodic
 
 __all__ = ["NoiseFloor", "drift_free_variance", "estimate_noise", "repeated_input_noise",
            "non_excited_noise", "residual_noise", "gap_test"]

@@ -3,7 +3,7 @@
 Two readings of the measurements against the nominal simulator:
 
 * the change of dynamic stiffness at the excited lines (see
-  :mod:`sklearn_pnlss.gap.stiffness_start`), which linear candidates (a
+  :mod:`sklearn_pnlss.gap.candidates.stiffness_start`), which linear candidates (a
   second mode, recalibration) are fitted to first;
 * the missing force along the measured motion (see
   :func:`sklearn_pnlss.gap.where.missing_force`), a restoring-force
@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .stiffness_start import measured_stiffness_change
-from .where import content_limit, missing_force
+from ..where import content_limit, missing_force
 
 __all__ = ["DataClues", "read_clues", "backlash_start", "force_law_start", "LINEAR_COLUMNS"]
 
@@ -55,7 +55,7 @@ def read_clues(nominal, u_list, y_list, y_nominal, n_periods, period, fs):
 
 
 #: The missing force per unit change of each recalibrated nominal parameter
-#: (see :func:`sklearn_pnlss.gap.effects.recalibration_effect`: mass
+#: (see :func:`sklearn_pnlss.gap.candidates.effects.recalibration_effect`: mass
 #: ``m (1 + t)``, damping ``c + t F / V``, stiffness ``k + t F / Y``).
 LINEAR_COLUMNS = {
     "mass": lambda clues, nominal, s: nominal.mass * clues.acceleration,

@@ -11,9 +11,9 @@ from dataclasses import dataclass
 import numpy as np
 from sklearn.utils import check_random_state
 
-from ..physics.oscillator import STATE_Z, band_limited_noise
-from ..physics.resampling import decimate_fir, upsample_fft
-from ..utils.validation import is_periodic
+from ...physics.oscillator import STATE_Z, band_limited_noise
+from ...physics.resampling import decimate_fir, upsample_fft
+from ...utils.validation import is_periodic
 
 __all__ = ["SignalSet", "simulate_signals", "prime_factors", "detect_period", "misfit"]
 

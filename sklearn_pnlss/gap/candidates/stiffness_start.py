@@ -16,8 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..frequency.bla import periodic_bla
-from ..utils.validation import is_periodic
+from ...frequency.bla import periodic_bla
+from ...utils.validation import is_periodic
 
 __all__ = ["StiffnessChange", "measured_stiffness_change", "second_mode_start", "recalibration_start"]
 

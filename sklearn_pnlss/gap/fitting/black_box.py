@@ -9,7 +9,7 @@ import warnings
 
 import numpy as np
 
-from ..utils.validation import is_periodic
+from ...utils.validation import is_periodic
 
 __all__ = ["fit_black_box", "branch_opinions"]
 
@@ -22,7 +22,7 @@ DEGREE = 7
 def fit_black_box(u_list, y_list, period, random_state, n_jobs):
     """A decoupled PNLSS fitted to the training signals, or None when the
     data do not allow one (no periodic signals)."""
-    from ..estimators import DecoupledPNLSSRegressor, PNLSSRegressor
+    from ...estimators import DecoupledPNLSSRegressor, PNLSSRegressor
 
     if not any(is_periodic(u.size, period) for u in u_list):
         return None

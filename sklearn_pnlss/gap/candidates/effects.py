@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..physics.forces import (
+from ...physics.forces import (
     BoucWen,
     CoulombFriction,
     CoupledMass,
@@ -94,13 +94,13 @@ class Effect:
     data_start : callable or None
         ``data_start(clues, nominal, scales, bounds) -> theta or None``: a
         start read from the training data before any fit (see
-        :mod:`sklearn_pnlss.gap.clues`).
+        :mod:`sklearn_pnlss.gap.candidates.clues`).
     force_law : callable or None
         ``force_law(y, v, scales)``: the restoring force at ``theta = 1``
         of an effect that is one stateless force linear in its one
         parameter (a cubic spring, quadratic damping): its start, alone or
         with the nominal parameters, is then a least-squares solve on the
-        missing force (:func:`~sklearn_pnlss.gap.clues.force_law_start`).
+        missing force (:func:`~sklearn_pnlss.gap.candidates.clues.force_law_start`).
     """
 
     name: str

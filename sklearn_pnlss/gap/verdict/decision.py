@@ -30,7 +30,7 @@ The rules, in order:
    physics closes).
 
 The noise floor is the training signals' (see
-:mod:`sklearn_pnlss.gap.noise_floor`; its ``source`` is in the decision and the
+:mod:`sklearn_pnlss.gap.verdict.noise_floor`; its ``source`` is in the decision and the
 report).  With no floor at all, closure counts against a floor
 ``NO_FLOOR_DB`` below the nominal gap and no test is made.
 """
@@ -39,7 +39,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from .noise_floor import gap_test
-from .simulate import misfit
+from ..fitting.simulate import misfit
 
 __all__ = ["RankedEffect", "Decision", "decide", "MIN_EXCESS_DB", "EXPLAINED_CLOSURE", "TIE_CLOSURE",
            "BLACK_BOX_MIN_CLOSURE", "NO_FLOOR_DB"]
@@ -127,7 +127,7 @@ def _db(x):
 def decide(fits, y_meas, y_nominal, y_effects, y_black_box, noise, significance, offsets=False):
     """Rank candidates and decide; see the module docstring.  With
     ``offsets`` every model is granted each signal's best constant offset
-    (see :func:`~sklearn_pnlss.gap.simulate.misfit`)."""
+    (see :func:`~sklearn_pnlss.gap.fitting.simulate.misfit`)."""
 
     def _mse(measured, simulated):
         return float(np.mean(misfit(simulated, measured, offsets) ** 2))

@@ -13,8 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from .clues import force_law_start
-from .effects import Effect
+from ..candidates.clues import force_law_start
+from ..candidates.effects import Effect
 from .simulate import FIT_MAX_PERIODS, misfit, simulate_signals
 
 __all__ = ["EffectFit", "with_recalibration", "with_delay", "meaningful_ftol", "fit_effect", "effect_model"]
@@ -61,7 +61,7 @@ class EffectFit:
 
 def with_recalibration(effect, recalibration):
     """The effect with the nominal parameters that ``recalibration`` refits
-    (see :func:`~sklearn_pnlss.gap.effects.recalibration_effect`) free too.
+    (see :func:`~sklearn_pnlss.gap.candidates.effects.recalibration_effect`) free too.
 
     Its ``theta`` is the effect's own followed by the recalibration's; the
     report reads the recalibrated values beside the effect's.
@@ -223,13 +223,13 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
         with the fitted model's own discretisation error.
     clues : DataClues, default=None
         Readings of the training data from which some effects take one
-        more start (see :mod:`sklearn_pnlss.gap.clues`).
+        more start (see :mod:`sklearn_pnlss.gap.candidates.clues`).
     ftol : float, default=1e-8
         Stop when an iteration lowers the cost by less than this fraction
         (see :func:`meaningful_ftol`).
     offsets : bool, default=False
         Grant each signal its best constant output offset (see
-        :func:`~sklearn_pnlss.gap.simulate.misfit`).
+        :func:`~sklearn_pnlss.gap.fitting.simulate.misfit`).
 
     Returns
     -------
