@@ -20,7 +20,8 @@ Families of data built the way measured data come (issue 16), ``--family``:
 (e) the clean family above; (a) the nominal read off the BLA of the same
 training data; (b) nominal parameters off by 10-30 %; (c) no period repeated
 (one period per signal, zero-input gaps, filtered noise, a growing ramp);
-(d) offsets on both channels and a sensor delay.  Each writes
+(d) offsets on both channels, a sensor delay and an anti-alias filter the
+simulator does not know.  Each writes
 ``results/gap_withheld_family_<f>.json`` (family e: ``gap_withheld.json``).
 
     python benchmarks/gap_withheld.py            # every case (about an hour)
@@ -97,7 +98,8 @@ FAMILIES = {
     "b": "nominal mass, damping and stiffness each off by 10-30 % (random signs)",
     "c": "no period repeated: one period per signal, realisations separated by zero-input gaps, "
          "filtered noise, a ramp of growing amplitude (by seed and strength)",
-    "d": "offsets on both channels and a sensor delay (0.5-1.5 samples) on the clean layout",
+    "d": "offsets on both channels, a sensor delay (0.5-1.5 samples) and an unknown anti-alias filter "
+         "(Butterworth, 4th order, 300 Hz) on the clean layout",
 }
 LAYOUTS_C = ("single_periods", "zero_gaps", "filtered_noise", "ramp")
 
@@ -158,6 +160,20 @@ def _offsets(u_list, y_list):
     return [u + 2.0 for u in u_list], [y + 3e-4 for y in y_list]
 
 
+def _anti_alias(y_list, periodic):
+    """Family d's own anti-alias chain on the displacement channel, unknown
+    to the diagnosis (whose simulator decimates with the benchmark's FIR
+    chain): a 4th-order Butterworth low-pass at 300 Hz, causal, in steady
+    state for a periodic record (filtered over two copies, the second kept)."""
+    from scipy.signal import butter, sosfilt
+
+    sos = butter(4, 300.0, fs=FS, output="sos")
+    out = []
+    for y, p in zip(y_list, periodic):
+        out.append(sosfilt(sos, np.tile(y, 2))[y.size:] if p else sosfilt(sos, y))
+    return out
+
+
 def _layout(family, name, seed):
     """Family c's layout of a case: cycled over the effects and seeds, so
     that one seed covers every layout."""
@@ -181,6 +197,9 @@ def make_data(truth, seed, family="e", layout=None):
     y_val = simulate_signals(real, val, transform, noise_rms=NOISE, random_state=rng)
     y_true = simulate_signals(real, val, transform)  # noiseless: the achievable
     if family == "d":
+        y_train = _anti_alias(y_train, [bool(P) for P in train.n_periods])
+        y_val = _anti_alias(y_val, [bool(P) for P in val.n_periods])
+        y_true = _anti_alias(y_true, [bool(P) for P in val.n_periods])
         (u_train, y_train), (u_val, y_val) = _offsets(u_train, y_train), _offsets(u_val, y_val)
     return u_train, y_train, u_val, y_val, y_true, period, layout
 
