@@ -7,11 +7,12 @@ import pytest
 
 from sklearn_pnlss.gap import GapDiagnosis, linear_nominal
 from sklearn_pnlss.gap.fitting.calibrate import with_recalibration
-from sklearn_pnlss.gap.candidates.clues import force_law_start, read_clues
+from sklearn_pnlss.gap.candidates.clues import DataClues, backlash_start, read_clues
 from sklearn_pnlss.gap.candidates.effects import Scales, delay_signal, make_effect, recalibration_effect
 from sklearn_pnlss.gap.report import GapReport
 from sklearn_pnlss.gap.fitting.simulate import SignalSet, misfit, simulate_signals
-from sklearn_pnlss.physics import CubicStiffness, Oscillator
+from sklearn_pnlss.gap.candidates.stiffness_start import measured_stiffness_change
+from sklearn_pnlss.physics import CoupledMass, CubicStiffness, DeadZoneSpring, Oscillator
 from sklearn_pnlss.signals import linear_chirp, multisine
 
 FS, N = 750.0, 1024
@@ -90,7 +91,7 @@ def test_force_law_start_solves_effect_and_nominal_errors_together(duffing):
     scales = Scales(force=50.0, displacement=float(np.std(np.concatenate(y))), velocity=0.1, duration=2.7,
                     u_peak=150.0, fs=FS)
     cubic = make_effect("cubic_stiffness")
-    theta = force_law_start(clues, cubic.force_law, nominal, scales, ("stiffness",))
+    theta = cubic.joint_start(clues, nominal, scales, ("stiffness",))
     k3 = theta[0] * scales.force / scales.displacement**3
     stiffness = nominal.stiffness + theta[1] * scales.stiffness
     assert k3 == pytest.approx(1e8, rel=0.02)
@@ -134,3 +135,44 @@ def test_recalibration_text_names_moved_parameters_only():
 
     text = GapReport.recalibration_text(type("R", (), {"decision": Decision})())
     assert text == ", with damping recalibrated by -14 %, stiffness by -4 %, a channel delay of 1.3 ms"
+
+
+def test_backlash_start_with_an_off_nominal():
+    """A dead-zone spring on a structure whose nominal stiffness is 20 %
+    low and damping 30 % high: with those freed, the missing-force solve
+    finds the clearance and the spring rate (to 5 %) and the stiffness
+    error; the fixed-nominal solve misreads them."""
+    real = TRUE.with_forces([DeadZoneSpring(2e4, 1e-3)])
+    u, y, _, _ = _data(real, seed=3)
+    nominal = Oscillator(2.0, 13.0, 4e4)
+    train = SignalSet.from_signals(u, N, FS, 10)
+    clues = read_clues(nominal, u, y, simulate_signals(nominal, train), train.n_periods, N, FS)
+    disp = float(np.std(np.concatenate(y)))
+    scales = Scales(force=50.0, displacement=disp, velocity=0.1, duration=2.7, u_peak=150.0, fs=FS)
+    theta = backlash_start(clues, scales, nominal=nominal, free=("damping", "stiffness"))
+    kb, gap = theta[0] * scales.stiffness, theta[1] * disp
+    assert kb == pytest.approx(2e4, rel=0.05) and gap == pytest.approx(1e-3, rel=0.05)
+    assert nominal.stiffness + theta[3] * scales.stiffness == pytest.approx(5e4, rel=0.02)
+    fixed = backlash_start(clues, scales)
+    assert abs(fixed[1] * disp / 1e-3 - 1) > 0.1 or abs(fixed[0] * scales.stiffness / 2e4 - 1) > 0.1
+
+
+def test_second_mode_joint_start_with_an_off_nominal():
+    """A mode at 60 Hz under a nominal 20 % too stiff and 20 % too heavy:
+    solved together with the nominal errors, the mode's frequency and mass
+    and the stiffness error are read off the FRF."""
+    m2, f2, zeta = 0.2, 60.0, 0.02
+    w2 = 2 * np.pi * f2
+    real = TRUE.with_forces([CoupledMass(m2, 2 * zeta * m2 * w2, m2 * w2**2)])
+    u, y, _, _ = _data(real, seed=7, noise=1e-7)
+    nominal = Oscillator(2.4, 10.0, 6e4)
+    y_nominal = simulate_signals(nominal, SignalSet.from_signals(u, N, FS, 10))
+    change = measured_stiffness_change(u, y, y_nominal, N, FS)
+    scales = Scales(force=50.0, displacement=1e-3, velocity=0.1, duration=3.0, u_peak=150.0, fs=FS)
+    theta = make_effect("second_mode").joint_start(DataClues(change), nominal, scales,
+                                                   ("mass", "damping", "stiffness"))
+    w1 = np.sqrt(6e4 / 2.4)
+    assert theta[1] * w1 == pytest.approx(w2, rel=0.01)
+    assert theta[0] * 2.4 == pytest.approx(m2, rel=0.1)
+    assert nominal.mass * (1 + theta[3]) == pytest.approx(2.0, rel=0.02)
+    assert nominal.stiffness + theta[5] * scales.stiffness == pytest.approx(5e4, rel=0.02)

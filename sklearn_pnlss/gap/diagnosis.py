@@ -149,6 +149,11 @@ class GapDiagnosis(BaseEstimator):
     black_box_branches_ : list of dict
         Reading of each black-box branch on the training signals (see
         :func:`sklearn_pnlss.gap.fitting.black_box.branch_opinions`).
+    delay_ : dict or None
+        The delay between the force and displacement channels the training
+        data show (``delay_s``, seconds; ``gain_db``, how much it improves
+        the refitted nominal), fitted with every candidate; None when the
+        refit gains less than 1 dB from it.
     train_gap_db_ : float
         Mean square training gap of the nominal simulator, dB.
     fit_time_ : float
@@ -291,8 +296,8 @@ class GapDiagnosis(BaseEstimator):
         self.train_gap_db_ = float(10 * np.log10(np.mean(np.concatenate(
             [misfit(a, b, self.offsets) for a, b in zip(y_nominal, y_list)]) ** 2)))
 
-        # The force-law starts read the measured motion, which a sensor's
-        # offset would shift.
+        # The force-law starts and the black box (which has no constant
+        # term) read the measured motion, which a sensor's offset would shift.
         y_centred = [y - y.mean() for y in y_list] if self.offsets else y_list
         clues = read_clues(self.nominal, u_list, y_centred, y_nominal, train.n_periods, self.period_, self.fs)
         coarse = train.coarse(self.fit_oversampling, self.nominal)
@@ -342,8 +347,7 @@ class GapDiagnosis(BaseEstimator):
                            for e in effects]
         tasks = {e.name: fit_task(e) for e in effects if e.name not in done}
         if self.black_box:
-            y_bb = [y - y.mean() for y in y_list] if self.offsets else y_list
-            tasks[_BLACK_BOX] = delayed(fit_black_box)(u_list, y_bb, self.period, self.random_state, 1)
+            tasks[_BLACK_BOX] = delayed(fit_black_box)(u_list, y_centred, self.period, self.random_state, 1)
         done.update(run(tasks))
         self.fits_ = [done[e.name] for e in effects]
         self.black_box_, self.black_box_branches_ = done.get(_BLACK_BOX), []

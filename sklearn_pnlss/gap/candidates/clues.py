@@ -105,21 +105,30 @@ def force_law_start(clues, force_law, nominal, scales, free=()):
     return (np.linalg.lstsq(A / norms, clues.force, rcond=None)[0] / norms)[:-1]
 
 
-def backlash_start(clues, scales, n_grid=200):
+def backlash_start(clues, scales, n_grid=200, nominal=None, free=()):
     """``theta = (kb, gap)`` of a dead-zone spring fitted to the missing
-    force: for each clearance on a grid up to the largest displacement the
-    spring rate follows by linear least squares."""
+    force, followed by the ``theta`` of the freed nominal parameters
+    (``free``, see :data:`LINEAR_COLUMNS`): for each clearance on a grid up
+    to the largest displacement the spring rate (and the nominal errors)
+    follow by linear least squares.  None when no clearance explains more
+    than the nominal errors alone."""
     if clues.force is None:
         return None
     y, f = clues.displacement, clues.force
-    best, best_cost = None, np.sum(f**2)
+    linear = np.stack([LINEAR_COLUMNS[name](clues, nominal, scales) for name in free] or [np.zeros_like(f)], 1)
+
+    def solve(A):
+        coef = np.linalg.lstsq(A, f, rcond=None)[0]
+        return coef, np.sum((f - A @ coef) ** 2)
+
+    best, best_cost = None, solve(linear)[1]
     for gap in np.linspace(0.0, np.max(np.abs(y)), n_grid, endpoint=False):
         basis = np.sign(y) * np.maximum(np.abs(y) - gap, 0.0)
-        bb = basis @ basis
-        if bb == 0:
+        if not basis.any():
             continue
-        kb = (basis @ f) / bb
-        cost = np.sum((f - kb * basis) ** 2)
+        coef, cost = solve(np.column_stack([basis, linear]))
         if cost < best_cost:
-            best, best_cost = np.array([kb / scales.stiffness, gap / scales.displacement]), cost
+            # the linear columns are per unit theta: their coefficients are theta
+            best, best_cost = np.concatenate([[coef[0] / scales.stiffness, gap / scales.displacement],
+                                              coef[1:1 + len(free)]]), cost
     return best

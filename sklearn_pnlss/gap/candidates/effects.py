@@ -25,7 +25,7 @@ from ...physics.forces import (
     StiffnessDrift,
 )
 from .clues import backlash_start, force_law_start
-from .stiffness_start import recalibration_start, second_mode_start
+from .stiffness_start import recalibration_start, second_mode_joint_start, second_mode_start
 
 __all__ = ["Scales", "Effect", "default_effects", "make_effect", "recalibration_effect", "BUILT_IN",
            "NOMINAL_PARAMETERS"]
@@ -95,12 +95,12 @@ class Effect:
         ``data_start(clues, nominal, scales, bounds) -> theta or None``: a
         start read from the training data before any fit (see
         :mod:`sklearn_pnlss.gap.candidates.clues`).
-    force_law : callable or None
-        ``force_law(y, v, scales)``: the restoring force at ``theta = 1``
-        of an effect that is one stateless force linear in its one
-        parameter (a cubic spring, quadratic damping): its start, alone or
-        with the nominal parameters, is then a least-squares solve on the
-        missing force (:func:`~sklearn_pnlss.gap.candidates.clues.force_law_start`).
+    joint_start : callable or None
+        ``joint_start(clues, nominal, scales, free) -> theta or None``: a
+        start of the effect's ``theta`` followed by that of the freed
+        nominal parameters ``free``, read from the missing force by least
+        squares (stateless force laws: a cubic spring, quadratic damping,
+        backlash; see :mod:`sklearn_pnlss.gap.candidates.clues`).
     """
 
     name: str
@@ -111,7 +111,7 @@ class Effect:
     description: str = ""
     is_recalibration: bool = field(default=False)
     data_start: callable = None
-    force_law: callable = None
+    joint_start: callable = None
 
     def data_starts(self, clues, nominal, scales):
         """Starting points read from the data (empty without clues or a
@@ -271,10 +271,15 @@ _FORCE_LAWS = {
 }
 
 
-def _force_law_data_start(force_law):
+def _force_law_starts(force_law):
+    """The data start and the joint start of a force law linear in its one
+    parameter."""
     def data_start(clues, nominal, scales, bounds):
         return force_law_start(clues, force_law, nominal, scales)
-    return data_start
+
+    def joint_start(clues, nominal, scales, free):
+        return force_law_start(clues, force_law, nominal, scales, free)
+    return data_start, joint_start
 
 
 def _built_in():
@@ -311,11 +316,16 @@ def _built_in():
         "stiffness changing linearly over time")
     effects["recalibration"] = recalibration_effect()
     for name, law in _FORCE_LAWS.items():
-        effects[name].force_law = law
-        effects[name].data_start = _force_law_data_start(law)
+        effects[name].data_start, effects[name].joint_start = _force_law_starts(law)
     effects["second_mode"].data_start = (
         lambda clues, nominal, scales, bounds: clues.change and second_mode_start(clues.change, nominal, bounds))
+    second_mode_bounds = effects["second_mode"].bounds
+    effects["second_mode"].joint_start = (
+        lambda clues, nominal, scales, free: clues.change and second_mode_joint_start(
+            clues.change, nominal, scales, second_mode_bounds, free))
     effects["backlash"].data_start = lambda clues, nominal, scales, bounds: backlash_start(clues, scales)
+    effects["backlash"].joint_start = (
+        lambda clues, nominal, scales, free: backlash_start(clues, scales, nominal=nominal, free=free))
     return effects
 
 

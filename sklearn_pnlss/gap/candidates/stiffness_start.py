@@ -19,7 +19,8 @@ import numpy as np
 from ...frequency.bla import periodic_bla
 from ...utils.validation import is_periodic
 
-__all__ = ["StiffnessChange", "measured_stiffness_change", "second_mode_start", "recalibration_start"]
+__all__ = ["StiffnessChange", "measured_stiffness_change", "second_mode_start", "second_mode_joint_start",
+           "recalibration_start"]
 
 
 @dataclass
@@ -108,12 +109,51 @@ def second_mode_start(change, nominal, bounds, n_grid=400):
     return best
 
 
+def _recalibration_basis(change, nominal, scales, free=("mass", "damping", "stiffness")):
+    """The stiffness change per unit ``theta`` of each freed nominal
+    parameter: ``-w^2 m``, ``i w F / V``, ``F / Y`` (see
+    :func:`~sklearn_pnlss.gap.candidates.effects.recalibration_effect`)."""
+    columns = {"mass": -change.omega**2 * nominal.mass,
+               "damping": 1j * change.omega * scales.force / scales.velocity,
+               "stiffness": np.full(change.omega.shape, scales.stiffness, complex)}
+    return np.stack([columns[name] for name in free], axis=1)
+
+
+def _weighted_solve(change, basis):
+    """Real coefficients of ``basis`` fitting the change (weighted), and the
+    weighted cost left."""
+    w = np.sqrt(change.weight)
+    A = np.concatenate([(w[:, None] * basis).real, (w[:, None] * basis).imag])
+    b = np.concatenate([(w * change.delta).real, (w * change.delta).imag])
+    coef = np.linalg.lstsq(A, b, rcond=None)[0]
+    return coef, float(np.sum((A @ coef - b) ** 2))
+
+
 def recalibration_start(change, nominal, scales):
     """``theta`` of the refitted mass, damping and stiffness: the stiffness
     change ``dk - w^2 dm + i w dc`` is linear in them."""
-    w = np.sqrt(change.weight)
-    basis = np.stack([-change.omega**2 * nominal.mass, 1j * change.omega * scales.force / scales.velocity,
-                      np.full(change.omega.shape, scales.stiffness, complex)], axis=1)
-    A = np.concatenate([(w[:, None] * basis).real, (w[:, None] * basis).imag])
-    b = np.concatenate([(w * change.delta).real, (w * change.delta).imag])
-    return np.linalg.lstsq(A, b, rcond=None)[0]
+    return _weighted_solve(change, _recalibration_basis(change, nominal, scales))[0]
+
+
+def second_mode_joint_start(change, nominal, scales, bounds, free, n_grid=400):
+    """:func:`second_mode_start` with the freed nominal parameters solved
+    together with the attached mass at every grid point: ``theta`` of the
+    mode followed by theirs.  A nominal that is off changes the dynamic
+    stiffness by ``dk - w^2 dm + i w dc`` too, which the mode alone would
+    try to explain."""
+    w1 = np.sqrt(nominal.stiffness / nominal.mass)
+    lo, hi = bounds
+    linear = _recalibration_basis(change, nominal, scales, free)
+    recal, recal_cost = _weighted_solve(change, linear)
+    best, best_cost = None, np.inf
+    for zeta in np.geomspace(max(lo[2], 1e-3), hi[2], 12):
+        for r in np.geomspace(max(lo[1], 1e-3), hi[1], n_grid):
+            h = _attached_oscillator(change.omega, r * w1, zeta)
+            coef, cost = _weighted_solve(change, np.column_stack([h, linear]))
+            if cost < best_cost:
+                mass = float(np.clip(coef[0], lo[0] * nominal.mass, hi[0] * nominal.mass))
+                best, best_cost = np.concatenate([[mass / nominal.mass, r, zeta], coef[1:]]), cost
+    if best is None or best_cost > 0.5 * recal_cost:
+        # no mode explains half of what the refit leaves: a negligible one
+        return np.concatenate([[lo[0], lo[1], 0.3], recal])
+    return best

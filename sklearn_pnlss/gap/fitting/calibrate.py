@@ -13,7 +13,6 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..candidates.clues import force_law_start
 from ..candidates.effects import Effect
 from .simulate import FIT_MAX_PERIODS, misfit, simulate_signals
 
@@ -81,9 +80,9 @@ def with_recalibration(effect, recalibration):
               np.concatenate([effect.bounds[1], recalibration.bounds[1]]))
 
     def data_start(clues, nominal, scales, bounds):
-        if effect.force_law is not None:
+        if effect.joint_start is not None:
             # effect and nominal errors together, from the missing force
-            joint = force_law_start(clues, effect.force_law, nominal, scales, free)
+            joint = effect.joint_start(clues, nominal, scales, free)
             if joint is not None:
                 return joint
         # the effect's own data start (or its first listed one) with the
@@ -93,7 +92,7 @@ def with_recalibration(effect, recalibration):
         return np.concatenate([own[0], recal[0]])
 
     return Effect(effect.name, effect.param_names + recalibration.param_names, starts, bounds, build,
-                  effect.description, effect.is_recalibration, data_start, effect.force_law)
+                  effect.description, effect.is_recalibration, data_start, effect.joint_start)
 
 
 def with_delay(effect, delay, start):
@@ -119,7 +118,7 @@ def with_delay(effect, delay, start):
     starts = [np.append(s, start) for s in effect.starts]
     bounds = (np.append(effect.bounds[0], delay.bounds[0]), np.append(effect.bounds[1], delay.bounds[1]))
     return Effect(effect.name, effect.param_names + delay.param_names, starts, bounds, build,
-                  effect.description, effect.is_recalibration, data_start, effect.force_law)
+                  effect.description, effect.is_recalibration, data_start, effect.joint_start)
 
 
 def effect_model(effect, theta, nominal, scales):
