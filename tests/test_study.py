@@ -49,6 +49,7 @@ def test_decoupled_grid_selects_on_validation_and_saves_models(tmp_path, capsys)
     assert code == 0
     printed = capsys.readouterr().out
     assert "<- selected" in printed and "decoupled" in printed
+    assert "... decoupled candidate 2/2 done, " in printed  # the grid's progress
     summary = json.loads((tmp_path / "results.json").read_text())
     grid = summary["grid"]
     assert [(row["n_branches"], row["degree"]) for row in grid] == [(1, 3), (2, 3)]
@@ -167,3 +168,16 @@ def test_the_library_never_imports_the_app():
             if any(name == "sklearn_pnlss.app" or name.startswith("sklearn_pnlss.app.") for name in names):
                 offenders.append(f"{rel}:{node.lineno}")
     assert not offenders, offenders
+
+
+def test_grid_candidates_are_counted_as_they_are_scored(capsys):
+    """The main job's grid search says each candidate as it is scored (issue
+    18: progress inside long fits, grid candidates included)."""
+    from sklearn_pnlss.app.study import _Steps
+
+    steps = _Steps(1, enabled=False)
+    score = steps.counted(lambda estimator, X, y: 91.25, 2, "decoupled candidate")
+    assert score(None, None, None) == 91.25 and score(None, None, None) == 91.25
+    steps.close()
+    assert capsys.readouterr().out.splitlines() == ["... decoupled candidate 1/2 done, -91.2 dB",
+                                                    "... decoupled candidate 2/2 done, -91.2 dB"]
