@@ -92,7 +92,7 @@ def with_recalibration(effect, recalibration):
         return np.concatenate([own[0], recal[0]])
 
     return Effect(effect.name, effect.param_names + recalibration.param_names, starts, bounds, build,
-                  effect.description, effect.is_recalibration, data_start, effect.joint_start)
+                  effect.description, effect.is_recalibration, data_start)
 
 
 def with_delay(effect, delay, start):
@@ -118,7 +118,7 @@ def with_delay(effect, delay, start):
     starts = [np.append(s, start) for s in effect.starts]
     bounds = (np.append(effect.bounds[0], delay.bounds[0]), np.append(effect.bounds[1], delay.bounds[1]))
     return Effect(effect.name, effect.param_names + delay.param_names, starts, bounds, build,
-                  effect.description, effect.is_recalibration, data_start, effect.joint_start)
+                  effect.description, effect.is_recalibration, data_start)
 
 
 def effect_model(effect, theta, nominal, scales):
