@@ -97,7 +97,7 @@ def test_force_law_start_solves_effect_and_nominal_errors_together(duffing):
     assert k3 == pytest.approx(1e8, rel=0.02)
     assert stiffness == pytest.approx(5e4, rel=0.02)
     joint = with_recalibration(cubic, recalibration_effect(("stiffness",)))
-    assert joint.data_starts(clues, nominal, scales)[0] == pytest.approx(theta)
+    assert any(np.allclose(start, theta) for start in joint.data_starts(clues, nominal, scales))
 
 
 def test_offsets_and_a_sensor_delay_are_not_blamed_on_physics():
@@ -203,3 +203,32 @@ def test_hysteresis_under_the_tangent_stiffness_nominal():
     assert params["beta_delta"] == pytest.approx(-1100.0, rel=0.01)
     assert params["stiffness"] == pytest.approx(5e4, rel=0.01)
     assert "stiffness by -50 %" in str(report).splitlines()[2]
+
+
+@pytest.mark.slow
+def test_strong_cubic_is_read_off_the_missing_force():
+    """Issue 16, item 5: a cubic spring of 1e9 N/m^3 at 50 N rms, the
+    benchmark's layout (benchmarks/gap_withheld.py): k3 from the missing
+    force to 0.1 %, the nominal refitted or not (measured 9.994e8 and
+    1.0005e9; the fit from zero stopped at 5.25e7). With the nominal fixed
+    the validation multisine is chaotic under the fitted model (a 1e-6
+    change of its parameters moves it above the noise) and is left out of
+    the closure, by name."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+    try:
+        import gap_withheld
+    finally:
+        sys.path.pop(0)
+    u, y, u_val, y_val, *_ = gap_withheld.make_data(((CubicStiffness(1e9),), {}, None), 0)
+    for free_nominal in (True, False):
+        diag = GapDiagnosis(gap_withheld.NOMINAL, fs=gap_withheld.FS, period=gap_withheld.PERIOD, n_jobs=2,
+                            black_box=False, effects=["cubic_stiffness", "backlash", "recalibration"],
+                            free_nominal=free_nominal).fit(u, y)
+        report = diag.report(u_val, y_val)
+        assert report.ranking[0].name == "cubic_stiffness"
+        assert report.ranking[0].params["k3"] == pytest.approx(1e9, rel=1e-3)
+    assert report.decision.sensitive_signals == [0]
+    assert "validation signal 0 left out" in str(report)

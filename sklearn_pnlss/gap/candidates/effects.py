@@ -115,13 +115,14 @@ class Effect:
 
     def data_starts(self, clues, nominal, scales):
         """Starting points read from the data (empty without clues or a
-        data start), inside the bounds."""
+        data start), inside the bounds; a data start may give several (rows
+        of a 2-D array)."""
         if clues is None or self.data_start is None:
             return []
         theta = self.data_start(clues, nominal, scales, self.bounds)
-        if theta is None or not np.all(np.isfinite(theta)):
+        if theta is None:
             return []
-        return [np.clip(theta, *self.bounds)]
+        return [np.clip(t, *self.bounds) for t in np.atleast_2d(theta) if np.all(np.isfinite(t))]
 
     @property
     def n_params(self):

@@ -80,16 +80,25 @@ def with_recalibration(effect, recalibration):
               np.concatenate([effect.bounds[1], recalibration.bounds[1]]))
 
     def data_start(clues, nominal, scales, bounds):
-        if effect.joint_start is not None:
-            # effect and nominal errors together, from the missing force
-            joint = effect.joint_start(clues, nominal, scales, free)
-            if joint is not None:
-                return joint
         # the effect's own data start (or its first listed one) with the
         # nominal parameters as the stiffness change suggests
         own = effect.data_starts(clues, nominal, scales) or effect.starts[:1]
         recal = recalibration.data_starts(clues, nominal, scales) or recalibration.starts[:1]
-        return np.concatenate([own[0], recal[0]])
+        starts = [np.concatenate([own[0], recal[0]])]
+        if effect.joint_start is not None:
+            # effect and nominal errors together, from the missing force,
+            # with all the freed parameters and with fewer: the mass error
+            # is the worst determined (a strong nonlinearity's harmonics
+            # beyond the derivatives' band leak into it), and the
+            # simulation error picks among the starts
+            for subset in dict.fromkeys((free, tuple(p for p in free if p != "mass"), ())):
+                joint = effect.joint_start(clues, nominal, scales, subset)
+                if joint is not None:
+                    theta = np.zeros(n + len(free))
+                    theta[:n] = joint[:n]
+                    theta[[n + free.index(p) for p in subset]] = joint[n:]
+                    starts.append(theta)
+        return np.array(starts)
 
     return Effect(effect.name, effect.param_names + recalibration.param_names, starts, bounds, build,
                   effect.description, effect.is_recalibration, data_start)
