@@ -232,3 +232,17 @@ def test_strong_cubic_is_read_off_the_missing_force():
         assert report.ranking[0].params["k3"] == pytest.approx(1e9, rel=1e-3)
     assert report.decision.sensitive_signals == [0]
     assert "validation signal 0 left out" in str(report)
+
+
+def test_joint_starts_with_nothing_freed():
+    """Every joint start also runs with no nominal parameter freed (one of
+    the starts a refitted candidate takes): the effect's own start."""
+    real = TRUE.with_forces([CubicStiffness(1e8)])
+    u, y, _, _ = _data(real, seed=1)
+    train = SignalSet.from_signals(u, N, FS, 10)
+    clues = read_clues(TRUE, u, y, simulate_signals(TRUE, train), train.n_periods, N, FS)
+    scales = Scales(force=50.0, displacement=float(np.std(np.concatenate(y))), velocity=0.1, duration=2.7,
+                    u_peak=150.0, fs=FS)
+    for name in ("cubic_stiffness", "backlash", "second_mode"):
+        theta = make_effect(name).joint_start(clues, TRUE, scales, ())
+        assert theta is not None and theta.size == make_effect(name).bounds[0].size, name

@@ -116,7 +116,7 @@ def _recalibration_basis(change, nominal, scales, free=("mass", "damping", "stif
     columns = {"mass": -change.omega**2 * nominal.mass,
                "damping": 1j * change.omega * scales.force / scales.velocity,
                "stiffness": np.full(change.omega.shape, scales.stiffness, complex)}
-    return np.stack([columns[name] for name in free], axis=1)
+    return np.stack([columns[name] for name in free], axis=1) if free else np.zeros((change.omega.size, 0))
 
 
 def _weighted_solve(change, basis):
