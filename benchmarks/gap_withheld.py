@@ -125,19 +125,23 @@ def _training_inputs(family, seed, layout):
     if layout == "zero_gaps":
         gap = np.zeros(1500)
         return [np.concatenate([np.concatenate([x[:, 0], gap]) for x in X])], PERIOD
+    # The non-periodic records are no whole number of periods long, so that
+    # the period passed (that of the validation multisine, which the user
+    # knows) does not make them steady state.
     rng = np.random.RandomState(seed)
     if layout == "filtered_noise":
         from scipy.signal import butter, sosfiltfilt
         sos = butter(6, [5.0, 150.0], btype="band", fs=FS, output="sos")
         out = []
         for _ in range(4):
-            e = sosfiltfilt(sos, rng.standard_normal(PERIOD))
+            e = sosfiltfilt(sos, rng.standard_normal(PERIOD - 192))
             out.append(50.0 * e / np.std(e))
-        return out, None
+        return out, PERIOD
     # ramp: the four realisations in a row, the amplitude growing from zero
     # (the mean level is the other families' 50 N rms)
-    u = np.concatenate([x[:, 0] for x in X]) * np.linspace(0.0, 1.0, 4 * PERIOD)
-    return [50.0 * u / np.std(u)], None
+    n = 4 * PERIOD - 192
+    u = np.concatenate([x[:, 0] for x in X])[:n] * np.linspace(0.0, 1.0, n)
+    return [50.0 * u / np.std(u)], PERIOD
 
 
 def _sensor_delay(seed):
