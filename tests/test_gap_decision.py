@@ -168,3 +168,13 @@ def test_without_noise_floor_the_floor_is_60_db_below_the_gap():
     assert d.significant
     assert d.ranking[0].closure == pytest.approx(0.5)
     assert d.best_effect == "unexplained"
+
+
+def test_estimated_floor_needs_a_dB_of_excess():
+    """A nominal 0.7 dB above a floor read from a model's residual is no
+    gap (the estimate is good to about a dB); above a floor from repeated
+    periods it is one."""
+    estimated = NoiseFloor(S2, np.full(513, S2), dof_per_sample=1.0, source="non_excited_lines")
+    before = [10**0.07 * S2] * 2
+    assert _decide(before, [(_fit("c"), [S2, S2])], noise=estimated).best_effect is None
+    assert _decide(before, [(_fit("c"), [S2, S2])]).best_effect == "c"

@@ -4,7 +4,8 @@ The rules, in order:
 
 1. **Is there a gap?**  The nominal simulation error is tested against the
    noise floor (chi-square with the noise's effective degrees of freedom,
-   Bonferroni over signals) and must also exceed it by ``MIN_EXCESS_DB``:
+   Bonferroni over signals) and must also exceed it by ``MIN_EXCESS_DB``
+   (``ESTIMATED_FLOOR_MIN_EXCESS_DB`` when the floor is a model's residual):
    otherwise the answer is ``None``.
 2. **Closure.**  Each candidate's closure is the fraction of the gap's
    excess over the noise floor, in dB, that it removes on the validation
@@ -41,11 +42,13 @@ import numpy as np
 from .noise_floor import gap_test
 from ..fitting.simulate import misfit
 
-__all__ = ["RankedEffect", "Decision", "decide", "MIN_EXCESS_DB", "EXPLAINED_CLOSURE", "TIE_CLOSURE",
+__all__ = ["RankedEffect", "Decision", "decide", "MIN_EXCESS_DB", "ESTIMATED_FLOOR_MIN_EXCESS_DB", "EXPLAINED_CLOSURE", "TIE_CLOSURE",
            "BLACK_BOX_MIN_CLOSURE", "NO_FLOOR_DB"]
 
 #: A gap smaller than this above the noise floor is not worth a diagnosis.
 MIN_EXCESS_DB = 0.5
+#: The same when the floor is an estimate (see :attr:`NoiseFloor.replicated`).
+ESTIMATED_FLOOR_MIN_EXCESS_DB = 1.0
 #: Fraction of the gap's excess over the noise (in dB) a candidate must remove.
 EXPLAINED_CLOSURE = 0.9
 #: Closure difference below which two candidates count as equally good,
@@ -189,7 +192,11 @@ def decide(fits, y_meas, y_nominal, y_effects, y_black_box, noise, significance,
     if noise is not None:
         p = min(1.0, len(before) * min(gap_test(b, noise, n) for b, n in zip(before, sizes)))
         worst = float(excess_db.max())
-        if p > significance or worst < MIN_EXCESS_DB:
+        # A floor read from a model's residual is known to about a dB: a
+        # gap within that of it is no gap (a null ramp record: the nominal
+        # 0.5 dB above its estimated floor, every candidate closing 0 %).
+        min_excess = MIN_EXCESS_DB if noise.replicated else ESTIMATED_FLOOR_MIN_EXCESS_DB
+        if p > significance or worst < min_excess:
             return Decision(None, False, p, True, reason=(
                 f"no significant gap: the nominal error is {worst:.2f} dB above the noise "
                 f"floor (p = {p:.2g})"), **common)
