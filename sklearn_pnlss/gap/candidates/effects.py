@@ -24,6 +24,7 @@ from ...physics.forces import (
     QuadraticStiffness,
     StiffnessDrift,
 )
+from ...physics.oscillator import Oscillator
 from .clues import backlash_start, force_law_start
 from .stiffness_start import recalibration_start, second_mode_joint_start, second_mode_start
 
@@ -262,19 +263,19 @@ def _single(lo, hi, starts=(0.0,)):
     return [np.array([v]) for v in starts], _box((lo, hi))
 
 
-# Force laws at theta = 1 of the effects that are one stateless force linear
-# in one parameter (they match the builders above).
-_FORCE_LAWS = {
-    "cubic_stiffness": lambda y, v, s: s.force * (y / s.displacement) ** 3,
-    "quadratic_stiffness": lambda y, v, s: s.force * (y / s.displacement) ** 2,
-    "coulomb_friction": lambda y, v, s: s.force * np.tanh(v / (0.01 * s.velocity)),
-    "quadratic_damping": lambda y, v, s: s.force * v * np.abs(v) / s.velocity**2,
-}
+#: The effects that are one stateless force linear in their one parameter:
+#: their starts are a least-squares solve on the missing force.
+_FORCE_LAW_EFFECTS = ("cubic_stiffness", "quadratic_stiffness", "coulomb_friction", "quadratic_damping")
 
 
-def _force_law_starts(force_law):
-    """The data start and the joint start of a force law linear in its one
-    parameter."""
+def _force_law_starts(build):
+    """The data start and the joint start of an effect that is one
+    stateless force linear in its one parameter.  Its force at ``theta = 1``
+    is read from its own builder, so the scaling lives in one place."""
+    def force_law(y, v, scales):
+        forces = build(np.ones(1), None, scales)[0]
+        return Oscillator(1.0, 0.0, 0.0, forces).restoring_force(y, v)
+
     def data_start(clues, nominal, scales, bounds):
         return force_law_start(clues, force_law, nominal, scales)
 
@@ -316,8 +317,8 @@ def _built_in():
     add("stiffness_drift", ("rate",), *_single(-1.0, 1.0), _drift,
         "stiffness changing linearly over time")
     effects["recalibration"] = recalibration_effect()
-    for name, law in _FORCE_LAWS.items():
-        effects[name].data_start, effects[name].joint_start = _force_law_starts(law)
+    for name in _FORCE_LAW_EFFECTS:
+        effects[name].data_start, effects[name].joint_start = _force_law_starts(effects[name].build)
     effects["second_mode"].data_start = (
         lambda clues, nominal, scales, bounds: clues.change and second_mode_start(clues.change, nominal, bounds))
     second_mode_bounds = effects["second_mode"].bounds
