@@ -58,6 +58,38 @@ class EffectFit:
     seconds: float = 0.0
 
 
+def _then(first, second):
+    """Two input transforms (either may be None) applied one after the other."""
+    if first is None or second is None:
+        return second if first is None else first
+
+    def both(u, fs, periodic):
+        return second(first(u, fs, periodic), fs, periodic)
+    return both
+
+
+def _combined(effect, extra, extra_start, data_start):
+    """The effect with ``extra``'s parameters appended to its ``theta``
+    (starting at ``extra_start``): the forces of both, the linear changes of
+    both, the effect's input transform then the extra's, and both sets of
+    physical values.  ``theta`` is split by the effect's own fitted
+    parameters (its bounds), not by the parameters it reports: an effect may
+    report more or fewer."""
+    n = effect.bounds[0].size
+
+    def build(theta, nominal, scales):
+        forces, linear, transform, physical = effect.build(theta[:n], nominal, scales)
+        x_forces, x_linear, x_transform, x_physical = extra.build(theta[n:], nominal, scales)
+        return (tuple(forces) + tuple(x_forces), {**linear, **x_linear}, _then(transform, x_transform),
+                {**physical, **x_physical})
+
+    starts = [np.concatenate([s, extra_start]) for s in effect.starts]
+    bounds = (np.concatenate([effect.bounds[0], extra.bounds[0]]),
+              np.concatenate([effect.bounds[1], extra.bounds[1]]))
+    return Effect(effect.name, effect.param_names + extra.param_names, starts, bounds, build,
+                  effect.description, effect.is_recalibration, data_start)
+
+
 def with_recalibration(effect, recalibration):
     """The effect with the nominal parameters that ``recalibration`` refits
     (see :func:`~sklearn_pnlss.gap.candidates.effects.recalibration_effect`) free too.
@@ -65,19 +97,8 @@ def with_recalibration(effect, recalibration):
     Its ``theta`` is the effect's own followed by the recalibration's; the
     report reads the recalibrated values beside the effect's.
     """
-    # Split theta by the effect's own fitted parameters (its bounds), not by
-    # the parameters it reports: an effect may report more or fewer.
     n = effect.bounds[0].size
     free = recalibration.param_names
-
-    def build(theta, nominal, scales):
-        forces, _, transform, physical = effect.build(theta[:n], nominal, scales)
-        _, linear, _, lin_phys = recalibration.build(theta[n:], nominal, scales)
-        return forces, linear, transform, {**physical, **lin_phys}
-
-    starts = [np.concatenate([s, recalibration.starts[0]]) for s in effect.starts]
-    bounds = (np.concatenate([effect.bounds[0], recalibration.bounds[0]]),
-              np.concatenate([effect.bounds[1], recalibration.bounds[1]]))
 
     def data_start(clues, nominal, scales, bounds):
         # the effect's own data start (or its first listed one) with the
@@ -100,34 +121,18 @@ def with_recalibration(effect, recalibration):
                     starts.append(theta)
         return np.array(starts)
 
-    return Effect(effect.name, effect.param_names + recalibration.param_names, starts, bounds, build,
-                  effect.description, effect.is_recalibration, data_start)
+    return _combined(effect, recalibration, recalibration.starts[0], data_start)
 
 
 def with_delay(effect, delay, start):
     """The effect with a channel delay free too (``delay`` is the
     ``input_delay`` effect, ``start`` its fitted ``theta``): the delay of
     the measurement chain is fitted with every candidate once found."""
-    n = effect.bounds[0].size
-
-    def build(theta, nominal, scales):
-        forces, linear, transform, physical = effect.build(theta[:n], nominal, scales)
-        _, _, shift, delay_phys = delay.build(theta[n:], nominal, scales)
-        if transform is None:
-            combined = shift
-        else:
-            def combined(u, fs, periodic):
-                return shift(transform(u, fs, periodic), fs, periodic)
-        return forces, linear, combined, {**physical, **delay_phys}
-
     def data_start(clues, nominal, scales, bounds):
         own = effect.data_starts(clues, nominal, scales)
-        return np.append(own[0], start) if own else None
+        return np.array([np.append(t, start) for t in own]) if own else None
 
-    starts = [np.append(s, start) for s in effect.starts]
-    bounds = (np.append(effect.bounds[0], delay.bounds[0]), np.append(effect.bounds[1], delay.bounds[1]))
-    return Effect(effect.name, effect.param_names + delay.param_names, starts, bounds, build,
-                  effect.description, effect.is_recalibration, data_start)
+    return _combined(effect, delay, np.atleast_1d(start), data_start)
 
 
 def effect_model(effect, theta, nominal, scales):
