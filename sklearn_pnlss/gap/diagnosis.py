@@ -411,19 +411,28 @@ class GapDiagnosis(BaseEstimator):
         candidates and the black box at the lines the training inputs do
         not excite (see :func:`~sklearn_pnlss.gap.verdict.noise_floor.non_excited_noise`):
         the floor of data that repeat no period."""
-        def simulate_fit(fit):
-            osc, transform, _ = effect_model(fit.effect, fit.theta, self.nominal, self.scales_)
-            try:
-                return simulate_signals(osc, train, transform)
-            except (ValueError, FloatingPointError):
-                return None
-
-        sims = Parallel(n_jobs=self.n_jobs, prefer="threads")(delayed(simulate_fit)(f) for f in self.fits_)
+        sims = self._simulate_fits(train)
         simulations = {"nominal": y_nominal, **{f.effect.name: s for f, s in zip(self.fits_, sims)}}
         if self.black_box_ is not None:
             bb = [self._black_box_predict(u) for u in u_list]
             simulations["black box"] = None if any(b is None for b in bb) else bb
         return non_excited_noise(u_list, y_list, simulations, self.period_, self.fs)
+
+    def _simulate_fit(self, fit, signals, theta=None):
+        """The fitted candidate's simulation of ``signals`` (at ``theta``,
+        default its fitted one); None where it diverges or is not physical."""
+        try:
+            osc, transform, _ = effect_model(fit.effect, fit.theta if theta is None else theta, self.nominal,
+                                             self.scales_)
+            return simulate_signals(osc, signals, transform)
+        except (ValueError, FloatingPointError):
+            return None
+
+    def _simulate_fits(self, signals):
+        """Every fitted candidate's simulation of ``signals``, in parallel
+        threads (None for one that diverges)."""
+        return Parallel(n_jobs=self.n_jobs, prefer="threads")(
+            delayed(self._simulate_fit)(f, signals) for f in self.fits_)
 
     def _black_box_predict(self, u):
         """The black box's simulation of one signal; None where it leaves its
@@ -447,15 +456,12 @@ class GapDiagnosis(BaseEstimator):
         """
         if noise is None or not decision.significant:
             return []
-        best = next((i for i, f in enumerate(self.fits_) if f.effect.name == decision.ranking[0].name), None)
+        best = next(i for i, f in enumerate(self.fits_) if f.effect.name == decision.ranking[0].name)
         fit = self.fits_[best]
         if y_effects[best] is None or not fit.effect.n_params:
             return []
-        theta = fit.theta * (1 + SENSITIVITY_STEP) + SENSITIVITY_STEP
-        try:
-            osc, transform, _ = effect_model(fit.effect, theta, self.nominal, self.scales_)
-            moved = simulate_signals(osc, val, transform)
-        except (ValueError, FloatingPointError):
+        moved = self._simulate_fit(fit, val, fit.theta * (1 + SENSITIVITY_STEP) + SENSITIVITY_STEP)
+        if moved is None:
             return []
         return [i for i, (a, b) in enumerate(zip(moved, y_effects[best]))
                 if np.mean((a - b) ** 2) > noise.variance]
@@ -493,15 +499,7 @@ class GapDiagnosis(BaseEstimator):
         val = self._signal_set(u_list)
         y_nominal = simulate_signals(self.nominal, val)
 
-        def simulate_fit(fit):
-            osc, transform, _ = effect_model(fit.effect, fit.theta, self.nominal, self.scales_)
-            try:
-                return simulate_signals(osc, val, transform)
-            except FloatingPointError:
-                return None
-
-        y_effects = Parallel(n_jobs=self.n_jobs, prefer="threads")(
-            delayed(simulate_fit)(f) for f in self.fits_)
+        y_effects = self._simulate_fits(val)
         y_black_box = None
         if self.black_box_ is not None:
             y_black_box = [self._black_box_predict(u) for u in u_list]

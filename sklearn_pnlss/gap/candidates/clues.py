@@ -64,6 +64,11 @@ LINEAR_COLUMNS = {
 }
 
 
+def _linear_columns(clues, nominal, scales, free):
+    """The :data:`LINEAR_COLUMNS` of the freed nominal parameters, in order."""
+    return [LINEAR_COLUMNS[name](clues, nominal, scales) for name in free]
+
+
 def force_law_start(clues, force_law, nominal, scales, free=()):
     """``theta`` of a force law linear in its one parameter, and of the
     freed nominal parameters, by least squares on the missing force (the
@@ -95,7 +100,7 @@ def force_law_start(clues, force_law, nominal, scales, free=()):
     if clues is None or clues.force is None:
         return None
     columns = [force_law(clues.displacement, clues.velocity, scales)]
-    columns += [LINEAR_COLUMNS[name](clues, nominal, scales) for name in free]
+    columns += _linear_columns(clues, nominal, scales, free)
     # and a constant: a static force (a force sensor's offset) is no effect
     columns.append(np.ones_like(clues.force))
     A = np.stack(columns, axis=1)
@@ -115,7 +120,7 @@ def backlash_start(clues, scales, n_grid=200, nominal=None, free=()):
     if clues.force is None:
         return None
     y, f = clues.displacement, clues.force
-    linear = np.stack([LINEAR_COLUMNS[name](clues, nominal, scales) for name in free] or [np.zeros_like(f)], 1)
+    linear = np.stack(_linear_columns(clues, nominal, scales, free) or [np.zeros_like(f)], 1)
 
     def solve(A):
         coef = np.linalg.lstsq(A, f, rcond=None)[0]
