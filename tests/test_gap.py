@@ -21,27 +21,16 @@ from sklearn_pnlss.physics import (
 )
 from sklearn_pnlss.signals import linear_chirp, multisine
 
-FS, N = 750.0, 1024
+from gap_signals import FS, N, gap_data
+
 NOMINAL = Oscillator(2.0, 10.0, 5e4)
 FAST = dict(fs=FS, period=N, oversampling=10, fit_oversampling=5, black_box=False)
-
-
-def _data(real, seed=0, n_periods=2, noise=2e-6):
-    X, _ = multisine(N, fs=FS, f_band=(5.0, 150.0), rms=50.0, n_periods=n_periods, n_realizations=3,
-                     random_state=seed)
-    sweep = linear_chirp(np.arange(3000) / FS, f_start=15.0, rate=8.0, amplitude=10.0)
-    train = SignalSet.from_signals([x[:, 0] for x in X[:2]], N, FS, 10)
-    val = SignalSet.from_signals([X[2, :N, 0], sweep], N, FS, 10)
-    rng = np.random.RandomState(seed)
-    y_train = simulate_signals(real, train, noise_rms=noise, random_state=rng)
-    y_val = simulate_signals(real, val, noise_rms=noise, random_state=rng)
-    return train.u, y_train, val.u, y_val
 
 
 @pytest.fixture(scope="module")
 def cubic_case():
     real = NOMINAL.with_forces([CubicStiffness(1e8)])
-    u, y, u_val, y_val = _data(real)
+    u, y, u_val, y_val = gap_data(real)
     diag = GapDiagnosis(NOMINAL, effects=["cubic_stiffness", "quadratic_damping", "recalibration"],
                         **FAST).fit(u, y)
     return diag, diag.report(u_val, y_val)
@@ -123,7 +112,7 @@ def test_report_text_dict_and_plot(cubic_case):
 
 
 def test_no_false_alarm_without_gap():
-    u, y, u_val, y_val = _data(NOMINAL, seed=3)
+    u, y, u_val, y_val = gap_data(NOMINAL, seed=3)
     report = GapDiagnosis(NOMINAL, effects=["cubic_stiffness", "recalibration"], **FAST).fit(u, y).report(
         u_val, y_val)
     assert report.best_effect is None and not report.significant
@@ -132,7 +121,7 @@ def test_no_false_alarm_without_gap():
 
 def test_parameter_error_is_recalibration():
     real = Oscillator(2.0, 10.0, 1.05 * 5e4)
-    u, y, u_val, y_val = _data(real, seed=4)
+    u, y, u_val, y_val = gap_data(real, seed=4)
     report = GapDiagnosis(NOMINAL, effects=["cubic_stiffness", "recalibration"], **FAST).fit(u, y).report(
         u_val, y_val)
     assert report.best_effect == "recalibration"
@@ -142,7 +131,7 @@ def test_parameter_error_is_recalibration():
 
 def test_missing_candidate_is_unexplained():
     real = NOMINAL.with_forces([QuadraticDamping(15.0)])
-    u, y, u_val, y_val = _data(real, seed=5)
+    u, y, u_val, y_val = gap_data(real, seed=5)
     report = GapDiagnosis(NOMINAL, effects=["quadratic_stiffness", "input_delay"], **FAST).fit(u, y).report(
         u_val, y_val)
     assert report.best_effect == "unexplained"
@@ -151,7 +140,7 @@ def test_missing_candidate_is_unexplained():
 
 def test_user_force_element_is_a_candidate():
     real = NOMINAL.with_forces([QuadraticDamping(15.0)])
-    u, y, u_val, y_val = _data(real, seed=6)
+    u, y, u_val, y_val = gap_data(real, seed=6)
     report = GapDiagnosis(NOMINAL, effects=["cubic_stiffness", QuadraticDamping(5.0)], **FAST).fit(u, y).report(
         u_val, y_val)
     assert report.best_effect == "QuadraticDamping"
@@ -177,7 +166,7 @@ def test_second_mode_start_read_from_the_frf():
     m2, f2, zeta = 0.2, 60.0, 0.02
     w2 = 2 * np.pi * f2
     real = NOMINAL.with_forces([CoupledMass(m2, 2 * zeta * m2 * w2, m2 * w2**2)])
-    u, y, _, _ = _data(real, seed=7, noise=1e-7)
+    u, y, _, _ = gap_data(real, seed=7, noise=1e-7)
     y_nominal = simulate_signals(NOMINAL, SignalSet.from_signals(u, N, FS, 10))
     change = measured_stiffness_change(u, y, y_nominal, N, FS)
     scales = Scales(force=50.0, displacement=1e-3, velocity=0.1, duration=3.0, u_peak=150.0, fs=FS)
@@ -195,7 +184,7 @@ def test_backlash_start_read_from_the_missing_force():
     unbalanced along the measured motion lands on the true rate and
     clearance, without a single simulation of the candidate."""
     real = NOMINAL.with_forces([DeadZoneSpring(3e4, 1.5e-3)])
-    u, y, _, _ = _data(real, seed=9, noise=1e-7)
+    u, y, _, _ = gap_data(real, seed=9, noise=1e-7)
     train = SignalSet.from_signals(u, N, FS, 10)
     clues = read_clues(NOMINAL, u, y, simulate_signals(NOMINAL, train), train.n_periods, N, FS)
     scales = Scales(force=50.0, displacement=1e-3, velocity=0.1, duration=3.0, u_peak=150.0, fs=FS)
@@ -206,7 +195,7 @@ def test_backlash_start_read_from_the_missing_force():
 
 def test_recalibration_start_is_exact_for_a_linear_error():
     real = Oscillator(2.2, 14.0, 1.05 * 5e4)
-    u, y, _, _ = _data(real, seed=8, noise=0.0)
+    u, y, _, _ = gap_data(real, seed=8, noise=0.0)
     y_nominal = simulate_signals(NOMINAL, SignalSet.from_signals(u, N, FS, 10))
     scales = Scales(force=50.0, displacement=1e-3, velocity=0.1, duration=3.0, u_peak=150.0, fs=FS)
     theta = recalibration_start(measured_stiffness_change(u, y, y_nominal, N, FS), NOMINAL, scales)
@@ -247,13 +236,13 @@ def test_noise_floor_is_not_raised_by_a_slow_drift():
     (dict(effects=[3.0]), "ForceElement"),
 ])
 def test_bad_effects(kwargs, match):
-    u, y, _, _ = _data(NOMINAL, seed=1, noise=0.0)
+    u, y, _, _ = gap_data(NOMINAL, seed=1, noise=0.0)
     with pytest.raises((ValueError, TypeError), match=match):
         GapDiagnosis(NOMINAL, **{**FAST, **kwargs}).fit(u, y)
 
 
 def test_bad_signals():
-    u, y, _, _ = _data(NOMINAL, seed=1, noise=0.0)
+    u, y, _, _ = gap_data(NOMINAL, seed=1, noise=0.0)
     diag = GapDiagnosis(NOMINAL, effects=["cubic_stiffness"], **FAST)
     with pytest.raises(ValueError, match="one channel"):
         diag.fit([np.column_stack([u[0], u[0]])], [y[0]])
@@ -283,7 +272,7 @@ def test_forgetting_period_on_periodic_data_warns():
     """Steady-state signals of two periods and period=None: a UserWarning
     names the period the inputs repeat with and the parameter to set; none
     with the period given, nor for single periods and a sweep."""
-    u, y, u_val, y_val = _data(NOMINAL, seed=1, noise=1e-7)
+    u, y, u_val, y_val = gap_data(NOMINAL, seed=1, noise=1e-7)
     forgot = GapDiagnosis(NOMINAL, effects=["cubic_stiffness"], **{**FAST, "period": None})
     with pytest.warns(UserWarning, match=r"repeat every 1024 samples \(1\.365 s, 2 periods per signal\).*"
                                          r"pass period=1024\."):

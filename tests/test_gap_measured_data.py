@@ -13,30 +13,20 @@ from sklearn_pnlss.gap.report import GapReport
 from sklearn_pnlss.gap.fitting.simulate import SignalSet, misfit, simulate_signals
 from sklearn_pnlss.gap.candidates.stiffness_start import measured_stiffness_change
 from sklearn_pnlss.physics import CoupledMass, CubicStiffness, DeadZoneSpring, Oscillator
-from sklearn_pnlss.signals import linear_chirp, multisine
+from sklearn_pnlss.signals import multisine
 
-FS, N = 750.0, 1024
+from gap_signals import FS, N, gap_data
+
 TRUE = Oscillator(2.0, 10.0, 5e4)
 FAST = dict(fs=FS, period=N, oversampling=10, fit_oversampling=5, black_box=False)
 EFFECTS = ["cubic_stiffness", "quadratic_damping", "backlash", "recalibration"]
-
-
-def _data(real, seed=0, transform=None, noise=2e-6):
-    X, _ = multisine(N, fs=FS, f_band=(5.0, 150.0), rms=50.0, n_periods=2, n_realizations=3, random_state=seed)
-    sweep = linear_chirp(np.arange(3000) / FS, f_start=15.0, rate=8.0, amplitude=10.0)
-    train = SignalSet.from_signals([x[:, 0] for x in X[:2]], N, FS, 10)
-    val = SignalSet.from_signals([X[2, :N, 0], sweep], N, FS, 10)
-    rng = np.random.RandomState(seed)
-    y_train = simulate_signals(real, train, transform, noise_rms=noise, random_state=rng)
-    y_val = simulate_signals(real, val, transform, noise_rms=noise, random_state=rng)
-    return train.u, y_train, val.u, y_val
 
 
 @pytest.fixture(scope="module")
 def duffing():
     """A hardening spring, and the linear nominal read off its BLA."""
     real = TRUE.with_forces([CubicStiffness(1e8)])
-    u, y, u_val, y_val = _data(real, seed=1)
+    u, y, u_val, y_val = gap_data(real, seed=1)
     nominal = linear_nominal(u, y, fs=FS, period=N)
     return nominal, u, y, u_val, y_val
 
@@ -110,7 +100,7 @@ def test_offsets_and_a_sensor_delay_are_not_blamed_on_physics():
     def sensor(u, fs, periodic):
         return delay_signal(u, delay * fs, periodic)
 
-    u, y, u_val, y_val = _data(real, seed=2, transform=sensor)
+    u, y, u_val, y_val = gap_data(real, seed=2, transform=sensor)
     u, u_val = [x + 2.0 for x in u], [x + 2.0 for x in u_val]
     y, y_val = [x + 3e-4 for x in y], [x + 3e-4 for x in y_val]
     diag = GapDiagnosis(TRUE, effects=EFFECTS + ["input_delay"], **FAST).fit(u, y)
@@ -143,7 +133,7 @@ def test_backlash_start_with_an_off_nominal():
     finds the clearance and the spring rate (to 5 %) and the stiffness
     error; the fixed-nominal solve misreads them."""
     real = TRUE.with_forces([DeadZoneSpring(2e4, 1e-3)])
-    u, y, _, _ = _data(real, seed=3)
+    u, y, _, _ = gap_data(real, seed=3)
     nominal = Oscillator(2.0, 13.0, 4e4)
     train = SignalSet.from_signals(u, N, FS, 10)
     clues = read_clues(nominal, u, y, simulate_signals(nominal, train), train.n_periods, N, FS)
@@ -164,7 +154,7 @@ def test_second_mode_joint_start_with_an_off_nominal():
     m2, f2, zeta = 0.2, 60.0, 0.02
     w2 = 2 * np.pi * f2
     real = TRUE.with_forces([CoupledMass(m2, 2 * zeta * m2 * w2, m2 * w2**2)])
-    u, y, _, _ = _data(real, seed=7, noise=1e-7)
+    u, y, _, _ = gap_data(real, seed=7, noise=1e-7)
     nominal = Oscillator(2.4, 10.0, 6e4)
     y_nominal = simulate_signals(nominal, SignalSet.from_signals(u, N, FS, 10))
     change = measured_stiffness_change(u, y, y_nominal, N, FS)
@@ -238,7 +228,7 @@ def test_joint_starts_with_nothing_freed():
     """Every joint start also runs with no nominal parameter freed (one of
     the starts a refitted candidate takes): the effect's own start."""
     real = TRUE.with_forces([CubicStiffness(1e8)])
-    u, y, _, _ = _data(real, seed=1)
+    u, y, _, _ = gap_data(real, seed=1)
     train = SignalSet.from_signals(u, N, FS, 10)
     clues = read_clues(TRUE, u, y, simulate_signals(TRUE, train), train.n_periods, N, FS)
     scales = Scales(force=50.0, displacement=float(np.std(np.concatenate(y))), velocity=0.1, duration=2.7,
