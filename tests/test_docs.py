@@ -533,8 +533,8 @@ FIGURES = [
                 "diagnosis (median;", "gap_withheld.py --family c",
            lambda: [*_family("c")[:2], _family("c")[3] if _family("c")[2] else -1], slack=1.0),
     Figure(GAP, "(a 4th-order Butterworth at 300 Hz): the right effect in 9 of 11 effect cases, the delay without "
-                "an effect named ``input_delay``, 128 s per diagnosis (median). Backlash and the second mode are "
-                "missed (``\"unexplained\"``, closing 33 % and 77 %)", "gap_withheld.py --family d",
+                "an effect named ``input_delay``, 125 s per diagnosis (median). Backlash and the second mode are "
+                "missed (``\"unexplained\"``, closing 33 % and 63 %)", "gap_withheld.py --family d",
            lambda: [4 * _source_of("benchmarks/gap_withheld.py", "butter(4, 300.0"), 300, *_family("d")[:2],
                     _family("d")[3] if _family("d")[2] else -1,
                     *[100 * r["correct_closure"] for r in _results("gap_withheld_family_d")["rows"]
