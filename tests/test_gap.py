@@ -271,7 +271,7 @@ def test_verbose_announces_each_candidate_as_it_is_fitted(capsys):
 def test_forgetting_period_on_periodic_data_warns():
     """Steady-state signals of two periods and period=None: a UserWarning
     names the period the inputs repeat with and the parameter to set; none
-    with the period given, nor for single periods and a sweep."""
+    with the period given."""
     u, y, u_val, y_val = gap_data(NOMINAL, seed=1, noise=1e-7)
     forgot = GapDiagnosis(NOMINAL, effects=["cubic_stiffness"], **{**FAST, "period": None})
     with pytest.warns(UserWarning, match=r"repeat every 1024 samples \(1\.365 s, 2 periods per signal\).*"
@@ -280,7 +280,32 @@ def test_forgetting_period_on_periodic_data_warns():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         GapDiagnosis(NOMINAL, effects=["cubic_stiffness"], **FAST).fit(u, y)
-        forgot.fit([u_val[0], u_val[1]], [y_val[0], y_val[1]])  # one period and a sweep
+
+
+def test_single_steady_state_periods_without_period_warn():
+    """One steady-state period does not repeat, yet simulated from rest its
+    start-up transient counts as gap.  With period=None a training or
+    validation signal whose misfit holds the nominal's start-up transient is
+    named (here with a cubic spring the nominal lacks: the model is off,
+    the transient is still recognised); records from rest (a sweep, noise
+    filtered from rest) are not."""
+    real = NOMINAL.with_forces([CubicStiffness(1e8)])
+    u, y, u_val, y_val = gap_data(real, seed=1, n_periods=1)
+    forgot = GapDiagnosis(NOMINAL, effects=["cubic_stiffness"], **{**FAST, "period": None})
+    with pytest.warns(UserWarning, match=r"training signals \[0, 1\] look like steady-state periods.*"
+                                         r"pass period=1024\."):
+        forgot.fit(u, y)
+    with pytest.warns(UserWarning, match=r"validation signals \[0\] look like"):
+        forgot.report(u_val, y_val)  # one period (named) and a sweep from rest (not)
+    rng = np.random.RandomState(0)
+    noise = np.convolve(rng.standard_normal(4000), np.hanning(9), "same")
+    u_rest = [u_val[1], 50.0 * noise / noise.std()]
+    rest = SignalSet.from_signals(u_rest, N, FS, 10)
+    y_rest = simulate_signals(real, rest, noise_rms=2e-6, random_state=rng)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        forgot.fit(u_rest, y_rest)
+        forgot.report(u_rest, y_rest)
 
 
 def test_detect_period():

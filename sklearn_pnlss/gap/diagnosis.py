@@ -63,6 +63,10 @@ HIDDEN_DELAY_SHIFTS = (0.5, 1.0, 1.5, 2.0, 3.0)
 #: delay on a backlash it does not explain), while a delay hidden behind
 #: the right effect is worth tens of dB once both are fitted.
 HIDDEN_DELAY_DB = 6.0
+#: Share of the nominal's start-up transient found in a signal's misfit above
+#: which ``period=None`` is warned about (see ``_warn_if_steady_state``):
+#: three standard deviations of a chance projection on a short record.
+STEADY_STATE_SHARE = 0.3
 
 
 def _expected_cost(name, effects):
@@ -280,8 +284,7 @@ class GapDiagnosis(BaseEstimator):
         _check_pairs(u_list, y_list, "X", "y")
         u_list = self._inputs(u_list)
         effects = self._candidates()
-        if self.period_ is None:
-            self._warn_if_periodic(u_list)
+        repeats = self.period_ is None and self._warn_if_periodic(u_list)
         train = self._signal_set(u_list)
 
         y_all = np.concatenate(y_list)
@@ -305,6 +308,9 @@ class GapDiagnosis(BaseEstimator):
         if self.noise_ is None:
             self.noise_ = repeated_input_noise(u_list, y_list, self.period, self.fs)
         y_nominal = simulate_signals(self.nominal, train)
+        if self.period_ is None and not repeats:
+            # (fit is wrapped by the parameter check: one frame more)
+            self._warn_if_steady_state(u_list, y_list, y_nominal, "training", stacklevel=4)
         self.train_gap_db_ = float(10 * np.log10(np.mean(np.concatenate(
             [misfit(a, b, self.offsets) for a, b in zip(y_nominal, y_list)]) ** 2)))
 
@@ -428,15 +434,15 @@ class GapDiagnosis(BaseEstimator):
         it belongs to the measurement chain and every candidate is
         refitted with it, from its own fit and from its clues aligned at
         that delay (with half the iterations: most of them start close).
-        Skipped when the best candidate already sits within that margin of
-        the noise floor.
+        Skipped when the best candidate already sits within
+        ``HIDDEN_DELAY_DB`` of the noise floor: no delay could gain that.
         """
         measured = {e.name for e in first}
         rest = [e for e in effects if e.name not in measured]
         if not rest:
             return effects
         best = min(rest, key=lambda e: done[e.name].train_mse)
-        if self.noise_ is not None and done[best.name].train_mse < self.noise_.variance * 10 ** (DELAY_FOUND_DB / 10):
+        if self.noise_ is not None and done[best.name].train_mse < self.noise_.variance * 10 ** (HIDDEN_DELAY_DB / 10):
             return effects
         first_look = done["input_delay"]  # its theta: the delay's (samples), then the refitted nominal's
         delay_start = first_look.theta[:1]
@@ -479,10 +485,10 @@ class GapDiagnosis(BaseEstimator):
         """Warn when the training inputs repeat themselves and no period was
         given: steady-state data would be simulated from rest (a transient
         the measurement does not hold) and their periods would give no
-        noise floor."""
+        noise floor.  Whether it warned."""
         found = detect_period(u_list)
         if found is None:
-            return
+            return False
         n_periods = [u.size / found for u in u_list]
         whole = all(abs(p - round(p)) < 1e-9 for p in n_periods)
         warnings.warn(
@@ -491,7 +497,42 @@ class GapDiagnosis(BaseEstimator):
             + (f", {'/'.join(str(round(p)) for p in sorted(set(n_periods)))} periods per signal" if whole else "")
             + f"), but period=None, so every signal is simulated from rest and no noise floor is read from "
             f"its periods. If they are in steady state, pass period={found}.",
-            UserWarning, stacklevel=3)
+            UserWarning, stacklevel=4)
+        return True
+
+    def _warn_if_steady_state(self, u_list, y_list, y_nominal, which, stacklevel):
+        """Warn about signals that look like one steady-state period while
+        period=None simulates them from rest.
+
+        A single period does not repeat, so the input cannot tell; the
+        response can.  The nominal simulated as that one period in steady
+        state differs from its simulation from rest by the start-up
+        transient ``d``; the measurement holds it (as a steady-state record
+        does) when the misfit from rest projects onto ``d`` with a
+        coefficient of at least ``STEADY_STATE_SHARE`` and ``d`` is not
+        negligible (a tenth of the misfit's power).  A record from rest
+        projects near zero: the model's other errors do not ring like its
+        own free response.
+        """
+        suspects = []
+        for i, (u, y, y_rest) in enumerate(zip(u_list, y_list, y_nominal)):
+            y_steady = simulate_signals(self.nominal, self._signal_set_of_period([u], u.size))[0]
+            d, r = y_steady - y_rest, y - y_rest
+            d, r = d - d.mean(), r - r.mean()
+            power_d, power_r = d @ d, r @ r
+            if power_d > 0.1 * power_r and r @ d > STEADY_STATE_SHARE * power_d:
+                suspects.append(i)
+        if suspects:
+            sizes = sorted({u_list[i].size for i in suspects})
+            warnings.warn(
+                f"The {which} signals {suspects} look like steady-state periods (at their start the response "
+                f"is already in full swing), but period=None, so they are simulated from rest and the "
+                f"start-up transient counts as gap. If each is one period of a periodic excitation, pass "
+                + (f"period={sizes[0]}." if len(sizes) == 1 else "a period that divides their lengths."),
+                UserWarning, stacklevel=stacklevel)
+
+    def _signal_set_of_period(self, u_list, period):
+        return SignalSet.from_signals(u_list, period, self.fs, self.oversampling)
 
     def _model_noise_floor(self, train, u_list, y_list, y_nominal):
         """Noise floor from the residuals of the nominal, the fitted
@@ -585,6 +626,8 @@ class GapDiagnosis(BaseEstimator):
         u_list = self._inputs(u_list)
         val = self._signal_set(u_list)
         y_nominal = simulate_signals(self.nominal, val)
+        if self.period_ is None:
+            self._warn_if_steady_state(u_list, y_list, y_nominal, "validation", stacklevel=3)
 
         y_effects = self._simulate_fits(val)
         y_black_box = None
