@@ -521,7 +521,7 @@ FIGURES = [
     Figure(GAP, "(``--quick``: one strength, one seed, 15 cases)", "gap_withheld.py --quick",
            lambda: [len(_results("gap_withheld_quick")["rows"])]),
     Figure(GAP, "(a) the nominal read off the BLA of the same data (:func:`~sklearn_pnlss.gap.linear_nominal`): "
-                "the right effect in 11 of 11 effect cases, no false alarm, 117 s per diagnosis (median)",
+                "the right effect in 11 of 11 effect cases, no false alarm, 100 s per diagnosis (median)",
            "gap_withheld.py --family a", lambda: [*_family("a")[:2], _family("a")[3] if _family("a")[2] else -1],
            slack=1.0),
     Figure(GAP, "(b) the nominal mass, damping and stiffness each 10-30 % off: the right effect in 11 of 11 effect "
