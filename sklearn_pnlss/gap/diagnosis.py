@@ -453,12 +453,16 @@ class GapDiagnosis(BaseEstimator):
             d = with_delay(e, make_effect("input_delay"), delay_start)
             return replace(d, starts=[np.append(done[e.name].theta, delay_start)] + list(starts), data_start=None)
 
+        clues_at = {}  # the clues aligned at each delay (samples), read once for every candidate
+
         def aligned_starts(e, shifts):
-            # e's data starts from the clues aligned at each delay (samples)
+            # e's data starts from the clues aligned at each delay
             starts = []
             for shift in shifts:
+                if shift not in clues_at:
+                    clues_at[shift] = aligned_clues(shift / self.fs)
                 d = with_delay(e, make_effect("input_delay"), [shift])
-                starts += d.data_starts(aligned_clues(shift / self.fs), self.nominal, self.scales_)
+                starts += d.data_starts(clues_at[shift], self.nominal, self.scales_)
             return starts
 
         # The first look's delay is biased by the nonlinearity it could not
@@ -478,7 +482,7 @@ class GapDiagnosis(BaseEstimator):
                   for e in rest if e is not best}
         done[best.name] = trial
         done.update(run(refits))
-        # the effects as fitted: the refits' starts are their warm ones
+        # the effects as refitted, the delay free in each
         return [e if e.name in measured else done[e.name].effect for e in effects]
 
     def _warn_if_periodic(self, u_list):
@@ -516,7 +520,9 @@ class GapDiagnosis(BaseEstimator):
         """
         suspects = []
         for i, (u, y, y_rest) in enumerate(zip(u_list, y_list, y_nominal)):
-            y_steady = simulate_signals(self.nominal, self._signal_set_of_period([u], u.size))[0]
+            # the signal as one steady-state period of itself
+            one_period = SignalSet.from_signals([u], u.size, self.fs, self.oversampling)
+            y_steady = simulate_signals(self.nominal, one_period)[0]
             d, r = y_steady - y_rest, y - y_rest
             d, r = d - d.mean(), r - r.mean()
             power_d, power_r = d @ d, r @ r
@@ -530,9 +536,6 @@ class GapDiagnosis(BaseEstimator):
                 f"start-up transient counts as gap. If each is one period of a periodic excitation, pass "
                 + (f"period={sizes[0]}." if len(sizes) == 1 else "a period that divides their lengths."),
                 UserWarning, stacklevel=stacklevel)
-
-    def _signal_set_of_period(self, u_list, period):
-        return SignalSet.from_signals(u_list, period, self.fs, self.oversampling)
 
     def _model_noise_floor(self, train, u_list, y_list, y_nominal):
         """Noise floor from the residuals of the nominal, the fitted

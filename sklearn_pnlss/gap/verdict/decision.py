@@ -42,8 +42,8 @@ import numpy as np
 from .noise_floor import gap_test
 from ..fitting.simulate import misfit
 
-__all__ = ["RankedEffect", "Decision", "decide", "MIN_EXCESS_DB", "ESTIMATED_FLOOR_MIN_EXCESS_DB", "EXPLAINED_CLOSURE", "TIE_CLOSURE",
-           "BLACK_BOX_MIN_CLOSURE", "NO_FLOOR_DB"]
+__all__ = ["RankedEffect", "Decision", "decide", "MIN_EXCESS_DB", "ESTIMATED_FLOOR_MIN_EXCESS_DB", "EXPLAINED_CLOSURE",
+           "TIE_CLOSURE", "BLACK_BOX_MIN_CLOSURE", "NO_FLOOR_DB"]
 
 #: A gap smaller than this above the noise floor is not worth a diagnosis.
 MIN_EXCESS_DB = 0.5
