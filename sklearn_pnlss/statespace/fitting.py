@@ -255,10 +255,13 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
             raise DivergenceError("the start model diverges on the training data")
         if stage == 0:
             callback(0, theta, float(e0 @ e0), np.nan)
+        current = model.with_theta(theta)
+        basis = current.step_basis(current.trajectory([seg.U for seg in objective.segments]))
         result = levenberg_marquardt(
             lambda th, obj=objective: obj.residual(model.with_theta(th)),
             lambda th, obj=objective: obj.normal_equations(model.with_theta(th)),
             theta, n_drop=model.n_null_directions, max_iter=max_iter, tol=settings.tol, callback=callback,
+            basis=basis,
         )
         theta = result.theta
         done += result.n_iter

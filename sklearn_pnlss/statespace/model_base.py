@@ -82,6 +82,13 @@ class StateSpaceModel:
         from each Levenberg-Marquardt step): the n^2 of the state basis."""
         return self.n_states**2
 
+    def step_basis(self, states_inputs):
+        """Basis in which Levenberg-Marquardt solves its steps (see
+        :func:`~sklearn_pnlss.statespace.levenberg_marquardt.levenberg_marquardt`),
+        given the points ``states_inputs`` (rows ``[x; u]``) the model
+        operates at; None: the parameters themselves."""
+        return None
+
     def with_theta(self, theta):
         """A copy with the parameters ``theta`` (in block order)."""
         new, i = {}, 0
