@@ -214,3 +214,37 @@ def test_jacobian_speed_sanity():
     print(f"decoupled Jacobian T=8192, n=3, r=3, d=10: {1e3 * elapsed:.2f} ms")
     assert J.shape == (8192, 1, model.n_params)
     assert np.all(np.isfinite(J))
+
+
+def test_step_basis_steps_the_branches_in_legendre_polynomials_over_their_range():
+    """Each branch's coefficient steps are Legendre polynomials of z / c
+    (c: the largest |z| at the points) less their value at 0; the other
+    blocks are stepped as they are. Over the points, the scaled columns of
+    the branch regression are far better conditioned than the powers (300 times here)."""
+    from numpy.polynomial import legendre
+
+    rng = np.random.default_rng(4)
+    model = _random_model(rng, r=2, d=11)
+    S = rng.uniform(-1, 1, (400, 4)) * [3.0, 0.1, 0.1, 0.1]  # z nearly uniform
+    basis = model.step_basis(S)
+    start = model.A.size + model.B.size + model.Wx.size + model.V.size
+    G_block = slice(start, start + model.G.size)
+    outside = np.ones(model.n_params, bool)
+    outside[G_block] = False
+    np.testing.assert_array_equal(basis[np.ix_(outside, outside)], np.eye(outside.sum()))
+    assert not basis[np.ix_(outside, ~outside)].any() and not basis[np.ix_(~outside, outside)].any()
+
+    Z = S @ model.V
+    for branch in range(2):
+        z, c = Z[:, branch], np.abs(Z[:, branch]).max()
+        block = basis[G_block, G_block][branch * 11:(branch + 1) * 11, branch * 11:(branch + 1) * 11]
+        powers = z[:, None] ** np.arange(1, 12)
+        stepped = powers @ block  # column k - 1: the branch stepped along coefficient k
+        for k in (1, 4, 11):
+            P_k = np.eye(k + 1)[k]
+            np.testing.assert_allclose(stepped[:, k - 1], legendre.legval(z / c, P_k) - legendre.legval(0, P_k),
+                                       atol=1e-9)
+
+        def cond(M):
+            return np.linalg.cond(M / np.linalg.norm(M, axis=0))
+        assert cond(stepped) * 100 < cond(powers)

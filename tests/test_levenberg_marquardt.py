@@ -90,3 +90,35 @@ def test_a_diverging_trial_step_is_rejected_and_a_diverging_start_refused():
     assert result.theta[0] > 1.9  # it creeps up to the edge with growing lambda
     with pytest.raises(ValueError, match="starting model diverges"):
         levenberg_marquardt(residual, normal_equations, np.array([2.5]))
+
+
+def test_a_well_conditioned_basis_reaches_the_optimum_in_fewer_steps():
+    """A degree-11 polynomial fitted to samples on [-1, 1]: in powers of t
+    the scaled columns are nearly collinear (condition number above 1e3),
+    and the damping, halved each step from the largest singular value, needs
+    many steps to free the smallest. Solved in Legendre polynomials (the same
+    model, ``basis`` maps their coefficients to the powers') the columns are
+    nearly orthogonal and a few steps reach the least-squares fit."""
+    from numpy.polynomial import legendre
+
+    t = np.linspace(-1, 1, 200)
+    y = np.abs(t) + 0.3 * np.sin(4 * t)  # a kink: every degree is needed
+    powers = np.column_stack([t**k for k in range(12)])
+    best = np.linalg.lstsq(powers, y, rcond=None)[0]
+    basis = np.zeros((12, 12))  # column k: the power coefficients of P_k
+    for k in range(12):
+        basis[: k + 1, k] = legendre.leg2poly(np.eye(k + 1)[k])
+
+    def residual(th):
+        return powers @ th - y
+
+    def normal_equations(th):
+        return powers.T @ powers, powers.T @ residual(th)
+
+    def excess(**kwargs):
+        result = levenberg_marquardt(residual, normal_equations, np.zeros(12), max_iter=8, tol=0.0, **kwargs)
+        return result.cost / np.sum(residual(best) ** 2) - 1
+
+    assert np.linalg.cond(powers / np.linalg.norm(powers, axis=0)) > 1e3
+    assert excess(basis=basis) < 1e-6
+    assert excess() > 1e-2
