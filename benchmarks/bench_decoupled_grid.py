@@ -124,16 +124,21 @@ def main(argv=None):
             if row is None:
                 cells.append("-")
                 continue
-            cells.append("".join(f"{v:7.1f}" if np.isfinite(v) else "    div" for v in (row["db_multisine"], row["db_sweep"])))
+            pair = (row["db_multisine"], row["db_sweep"])
+            cells.append("".join(f"{v:7.1f}" if np.isfinite(v) else "    div" for v in pair))
         print(f"{r:<6d}" + "".join(f"{c:>15s}" for c in cells))
     finite = [x for x in rows if np.isfinite(x["db_multisine"]) and np.isfinite(x["db_sweep"])]
     best = min(finite, key=lambda x: x["db_multisine"] + x["db_sweep"]) if finite else None
     beats = [x for x in finite if x["db_multisine"] <= full_ms and x["db_sweep"] <= full_sw]
     small = [x for x in finite if x["n_nonlinear_params"] <= SMALL]
     best_small = min(small, key=lambda x: x["db_multisine"] + x["db_sweep"]) if small else None
-    for what, row in (("best", best), (f"best of at most {SMALL} nonlinear parameters", best_small)):
+    # For a target on both signals: the candidate whose worse signal is best.
+    best_small_worst = min(small, key=lambda x: max(x["db_multisine"], x["db_sweep"])) if small else None
+    for what, row in (("best (mean of both)", best), (f"best of at most {SMALL} nonlinear parameters (mean of both)",
+                                                       best_small),
+                      (f"best of at most {SMALL} nonlinear parameters (worse signal)", best_small_worst)):
         if row:
-            print(f"{what} (mean of both): r={row['n_branches']}, d={row['degree']}, {row['n_nonlinear_params']} "
+            print(f"{what}: r={row['n_branches']}, d={row['degree']}, {row['n_nonlinear_params']} "
                   f"nonlinear parameters: {row['db_multisine']:.2f} / {row['db_sweep']:.2f} dB")
     print(f"{len(beats)} decoupled models beat the full PNLSS on both test signals; "
           f"{len(rows) - len(finite)} diverged on a test signal")
@@ -142,7 +147,8 @@ def main(argv=None):
         "n_jobs": args.n_jobs, "n_init": args.n_init, "n_train_signals": n_train, "grid_time_s": t_grid,
         "seed": args.seed, "max_iter": args.max_iter, "max_params": args.max_params,
         "full_pnlss": {"db_multisine": full_ms, "db_sweep": full_sw, "n_nonlinear_params": 90},
-        "models": rows, "best": best, f"best_within_{SMALL}": best_small, "n_beating_full": len(beats),
+        "models": rows, "best": best, f"best_within_{SMALL}": best_small,
+        f"best_within_{SMALL}_worse_signal": best_small_worst, "n_beating_full": len(beats),
     })
     write_results(results, args.output)
 
