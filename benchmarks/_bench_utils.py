@@ -62,6 +62,20 @@ def first_call(code, cache_dir=None):
     return times
 
 
+def score_test_signals(model, data):
+    """{"multisine": dB, "sweep": dB} of ``model`` on the test signals of
+    ``data`` (``X_test_multisine``, ...), None where the simulation diverges."""
+    from sklearn_pnlss import DivergenceError
+
+    out = {}
+    for key in ("multisine", "sweep"):
+        try:
+            out[key] = -float(model.score(data[f"X_test_{key}"], data[f"y_test_{key}"]))
+        except DivergenceError:
+            out[key] = None
+    return out
+
+
 def write_results(results, output):
     output = Path(output)
     output.parent.mkdir(parents=True, exist_ok=True)

@@ -27,7 +27,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _bench_utils import RESULTS, header, write_results  # noqa: E402
+from _bench_utils import RESULTS, header, score_test_signals, write_results  # noqa: E402
 
 DEFAULT_OUTPUT = RESULTS / "branch_margins.json"
 VARIANTS = {
@@ -39,19 +39,6 @@ VARIANTS = {
     "linear": {"extrapolation": "linear"},
     "polynomial": {"extrapolation": "polynomial"},
 }
-
-
-def _scores(model, data):
-    """{signal: dB or None when the simulation diverges}."""
-    from sklearn_pnlss import DivergenceError
-
-    out = {}
-    for key in ("multisine", "sweep"):
-        try:
-            out[key] = -float(model.score(data[f"X_test_{key}"], data[f"y_test_{key}"]))
-        except DivergenceError:
-            out[key] = None
-    return out
 
 
 def main(argv=None):
@@ -85,12 +72,12 @@ def main(argv=None):
 
     row = next(r for r in summary["results"] if r["model"] == "decoupled")
     rows = [{"variant": "hold", "params": {}, "fit_s": row["fit_time_s"],
-             "main_job": {"multisine": row["multisine_db"], "sweep": row["sweep_db"]}, **_scores(held, data)}]
+             "main_job": {"multisine": row["multisine_db"], "sweep": row["sweep_db"]}, **score_test_signals(held, data)}]
     print(f"{'hold':<18}{rows[0]['multisine']:>9.2f}{rows[0]['sweep']:>9.2f}  (the main job's model)", flush=True)
     for name, params in VARIANTS.items():
         t0 = time.perf_counter()
         model = clone(held).set_params(**params).fit(attach_stage(X, start), y, X_val=X_val, y_val=y_val)
-        scores = _scores(model, data)
+        scores = score_test_signals(model, data)
         rows.append({"variant": name, "params": params, "fit_s": round(time.perf_counter() - t0, 1), **scores})
         cells = "".join(f"{'diverged' if v is None else f'{v:.2f}':>9}" for v in scores.values())
         print(f"{name:<18}{cells}", flush=True)

@@ -26,13 +26,13 @@ from pathlib import Path
 from joblib import Parallel, delayed
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _bench_utils import DEFAULT_DATA, RESULTS, header, write_results  # noqa: E402
+from _bench_utils import DEFAULT_DATA, RESULTS, header, score_test_signals, write_results  # noqa: E402
 
 DEFAULT_OUTPUT = RESULTS / "step_basis.json"
 
 
 def _fit_and_score(start, X, y, val, official, random_state, max_iter, P):
-    from sklearn_pnlss import DecoupledPNLSSRegressor, DivergenceError
+    from sklearn_pnlss import DecoupledPNLSSRegressor
     from sklearn_pnlss.utils.handover import attach_stage
 
     model = DecoupledPNLSSRegressor(3, n_branches=3, degree=11, period=P, n_init=1, max_iter=max_iter,
@@ -40,13 +40,8 @@ def _fit_and_score(start, X, y, val, official, random_state, max_iter, P):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         model.fit(attach_stage(X, start), y, X_val=val[0], y_val=val[1])
-    out = {"random_state": random_state, "n_iter": int(model.n_iter_), "validation_db": float(model.init_scores_[0])}
-    for key in ("multisine", "sweep"):
-        try:
-            out[key] = -float(model.score(official[f"X_test_{key}"], official[f"y_test_{key}"]))
-        except DivergenceError:
-            out[key] = None
-    return out
+    return {"random_state": random_state, "n_iter": int(model.n_iter_),
+            "validation_db": float(model.init_scores_[0]), **score_test_signals(model, official)}
 
 
 def main(argv=None):
