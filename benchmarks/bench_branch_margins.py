@@ -72,7 +72,8 @@ def main(argv=None):
 
     row = next(r for r in summary["results"] if r["model"] == "decoupled")
     rows = [{"variant": "hold", "params": {}, "fit_s": row["fit_time_s"],
-             "main_job": {"multisine": row["multisine_db"], "sweep": row["sweep_db"]}, **score_test_signals(held, data)}]
+             "main_job": {"multisine": row["multisine_db"], "sweep": row["sweep_db"]},
+             **score_test_signals(held, data)}]
     print(f"{'hold':<18}{rows[0]['multisine']:>9.2f}{rows[0]['sweep']:>9.2f}  (the main job's model)", flush=True)
     for name, params in VARIANTS.items():
         t0 = time.perf_counter()
