@@ -248,6 +248,15 @@ def _bounded(model, extrapolation="hold"):
                 if row["model"] == model and row["extrapolation"] == extrapolation)
 
 
+def _held_twin_gap(model):
+    """Largest |dB| between a model fitted with extrapolation="polynomial"
+    and "hold": 50 N mean, official multisine and sweep."""
+    plain, held = _bounded(model, "polynomial"), _bounded(model)
+    return max(abs(plain[k]["db" if k.startswith("official") else "db_mean"]
+                   - held[k]["db" if k.startswith("official") else "db_mean"])
+               for k in ("new_50N", "official_multisine", "official_sweep"))
+
+
 def _accuracy(record, degrees, grown):
     """A converged fit of bench_pnlss.py --accuracy."""
     return next(row for row in _results("pnlss")["accuracy"]
@@ -408,10 +417,10 @@ FIGURES = [
                "- -91.12 / -97.22 dB", BOUNDED, lambda: [2, 3, *_bounded_row("pnlss_states_23")]),
     Figure(PN, "PNLSS (2, 3), states and input, main job's data - 106 - 0 / 0, -94.29 dB - 0 / 0, -91.70 dB "
                "- -94.37 / -97.27 dB", BOUNDED, lambda: [2, 3, *_bounded_row("pnlss_si_23")]),
-    Figure(PN, "decoupled r = 3, d = 10 (main job) - 67 - 0 / 0, -97.92 dB - 0 / 0, -94.20 dB "
-               "- -97.93 / -102.06 dB", BOUNDED, lambda: [3, 10, *_bounded_row("decoupled_r3_d10")]),
-    Figure(PN, "decoupled r = 3, d = 11 (the grid's best on the test multisine) - 70 - 0 / 0, -98.13 dB "
-               "- 0 / 0, -94.30 dB - -98.18 / -101.58 dB", f"{BOUNDED}; {GRID}",
+    Figure(PN, "decoupled r = 3, d = 10 (main job) - 67 - 0 / 0, -97.61 dB - 0 / 0, -95.44 dB "
+               "- -97.62 / -101.74 dB", BOUNDED, lambda: [3, 10, *_bounded_row("decoupled_r3_d10")]),
+    Figure(PN, "decoupled r = 3, d = 11 (the grid's best on the test multisine) - 70 - 0 / 0, -98.68 dB "
+               "- 0 / 0, -95.44 dB - -99.05 / -102.46 dB", f"{BOUNDED}; {GRID}",
            lambda: [*_grid_best_on_multisine(), *_bounded_row("decoupled_r3_d11")]),
     Figure(PN, "PNLSS (3, 5, 7), states, grown, twenty realisations - 217 - 0 / 0, -98.49 dB - 0 / 7, -91.66 dB "
                "- -98.56 / -104.83 dB", BOUNDED, lambda: [3, 5, 7, *_bounded_row("pnlss_states_357")]),
@@ -421,15 +430,17 @@ FIGURES = [
                     == _bounded("decoupled_r3_d10", "polynomial")["new_60N"]["n_diverged"] else -1,
                     _results("bounded")["n_new_signals_per_level"], _results("bounded")["levels_N"][1],
                     _bounded("pnlss_states_357", "polynomial")["new_60N"]["n_diverged"], 3, 5, 7]),
-    Figure(PN, "the decoupled r = 3, d = 10 model then averages -95.56 dB at 50 N and reaches -95.92 / -100.27 dB "
-               "on the official signals, 2.4 dB and 2 dB worse than held", BOUNDED,
-           lambda: [3, 10, _bounded("decoupled_r3_d10", "polynomial")["new_50N"]["db_mean"], 50,
-                    _bounded("decoupled_r3_d10", "polynomial")["official_multisine"]["db"],
-                    _bounded("decoupled_r3_d10", "polynomial")["official_sweep"]["db"],
-                    _bounded("decoupled_r3_d10", "polynomial")["new_50N"]["db_mean"]
-                    - _bounded("decoupled_r3_d10")["new_50N"]["db_mean"],
-                    _bounded("decoupled_r3_d10", "polynomial")["official_multisine"]["db"]
-                    - _bounded("decoupled_r3_d10")["official_multisine"]["db"]]),
+    Figure(PN, "the decoupled r = 3, d = 11 model then averages -95.54 dB at 50 N and reaches -95.14 / -98.81 dB "
+               "on the official signals, 3.1 dB and 3.9 dB worse than held, while the r = 3, d = 10 model is within "
+               "0.3 dB of its held twin", BOUNDED,
+           lambda: [3, 11, _bounded("decoupled_r3_d11", "polynomial")["new_50N"]["db_mean"], 50,
+                    _bounded("decoupled_r3_d11", "polynomial")["official_multisine"]["db"],
+                    _bounded("decoupled_r3_d11", "polynomial")["official_sweep"]["db"],
+                    _bounded("decoupled_r3_d11", "polynomial")["new_50N"]["db_mean"]
+                    - _bounded("decoupled_r3_d11")["new_50N"]["db_mean"],
+                    _bounded("decoupled_r3_d11", "polynomial")["official_multisine"]["db"]
+                    - _bounded("decoupled_r3_d11")["official_multisine"]["db"],
+                    3, 10, _held_twin_gap("decoupled_r3_d10")], slack=0.05),
     Figure(PN, "leaves its range on 7 of the 20 signals at 60 N even when held", BOUNDED,
            lambda: [_bounded("pnlss_states_357")["new_60N"]["n_runaway"],
                     _results("bounded")["n_new_signals_per_level"], _results("bounded")["levels_N"][1]]),
