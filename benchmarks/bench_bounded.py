@@ -18,7 +18,8 @@ never fitted for), and gives the rms errors in dB of the others.
 Models: PNLSS (2, 3) states only and states and input on the main job's data
 (two realisations of two periods at 55 N, a third for validation); the
 decoupled model r = 3, d = 10 (the main job's) and r = 3, d = 11 (the best
-of the seed paper's grid, ``benchmarks/results/decoupled_grid.json``) from
+of at most 60 nonlinear parameters of the seed paper's grid,
+``benchmarks/results/decoupled_grid.json``) from
 the states-and-input model; PNLSS (3, 5, 7) states only, grown, on twenty
 realisations at 50 N (``bench_pnlss.py``'s accuracy case).
 
