@@ -147,6 +147,16 @@ class DecoupledModel(StateSpaceModel):
         ``benchmarks/bench_step_basis.py``): the median start ends at
         -98.90 dB on the test multisine instead of -94.07 dB. The other
         blocks are stepped as they are.
+
+        Parameters
+        ----------
+        states_inputs : array-like of shape (n_points, n_states + n_inputs)
+            Rows ``[x; u]`` along the simulation of the training signals.
+
+        Returns
+        -------
+        basis : ndarray of shape (n_params, n_params)
+            Maps step coordinates to a step of ``theta``.
         """
         z = self.bounded_variables(np.asarray(states_inputs, dtype=float))
         reach = np.abs(z).max(axis=0)
