@@ -595,7 +595,7 @@ FIGURES = [
            "gap_withheld.py --family b",
            lambda: [10 * _source_of("benchmarks/gap_withheld.py", "rng.uniform(0.1, 0.3, 3)"), 30,
                     *_family("b")[:2], _family("b")[3] if _family("b")[2] else -1], slack=1.0),
-    Figure(GAP, "cycled over the effects): the right effect in 11 of 11 effect cases, no false alarm, 60 s per "
+    Figure(GAP, "cycled over the effects): the right effect in 11 of 11 effect cases, no false alarm, 42 s per "
                 "diagnosis (median;", "gap_withheld.py --family c",
            lambda: [*_family("c")[:2], _family("c")[3] if _family("c")[2] else -1], slack=1.0),
     Figure(GAP, "(a 4th-order Butterworth at 300 Hz), at both strengths of every effect (``--strengths 2``, 23 "
