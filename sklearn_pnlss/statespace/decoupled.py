@@ -164,9 +164,10 @@ class DecoupledModel(StateSpaceModel):
         basis = np.eye(self.n_params)
         start = sum(getattr(self, name).size for name in self._block_names[: self._block_names.index("G")])
         d = self.degree
+        legendre_in_powers, powers = legendre_power_matrix(d), np.arange(1, d + 1)[:, None]
         for l, c in enumerate(reach):
             i = start + l * d
-            basis[i : i + d, i : i + d] = legendre_power_matrix(d) / c ** np.arange(1, d + 1)[:, None]
+            basis[i : i + d, i : i + d] = legendre_in_powers / c**powers
         return basis
 
     def _run(self, U, x0):
