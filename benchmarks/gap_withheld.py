@@ -317,7 +317,7 @@ def main(argv=None):
     parser.add_argument("--quick", action="store_true", help="one seed and one strength per effect")
     parser.add_argument("--seeds", type=int, default=2)
     parser.add_argument("--family", default="e", choices=sorted(FAMILIES),
-                        help="; ".join(f"{k}: {v}" for k, v in FAMILIES.items()))
+                        help="; ".join(f"{k}: {v}" for k, v in FAMILIES.items()).replace("%", "%%"))
     parser.add_argument("--strengths", type=int, default=2, help="strengths per effect (1 or 2)")
     parser.add_argument("--only", nargs="*", default=None, help="true effects to run (names, 'null')")
     parser.add_argument("--no-removed", action="store_true",

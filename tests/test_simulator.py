@@ -303,6 +303,29 @@ def test_steady_state_not_reached_warns():
     assert sim.n_periods == 3
 
 
+def test_a_steady_state_that_cannot_settle_stops_early():
+    """An undamped oscillator, and a hysteresis without dissipation (gamma = 0:
+    its loop shifts freely), never settle: once plain periods show that the
+    cap cannot be reached settled, the search stops, unsettled, with the
+    warning, instead of integrating all 200 periods."""
+    u = np.sin(2 * np.pi * 3 * np.arange(200) / 200)
+    neutral = Oscillator(2.0, 10.0, 5e4, forces=(BoucWen(1300.0, 340.0, 0.0, 0.3, 1.0),))
+    for osc, u in [(Oscillator(1.0, 0.0, 1e4), u), (neutral, 300 * _few_line_signal(512, np.arange(4, 100)))]:
+        with pytest.warns(ConvergenceWarning, match="max_periods=200"):
+            sim = osc.simulate_fine(u, fs=200.0 if osc is not neutral else 3750.0, periodic=True, max_periods=200)
+        assert sim.n_periods <= 12
+
+
+def test_a_response_beyond_max_abs_stops_after_one_period():
+    osc = Oscillator(1.0, 1.0, 1e4)
+    u = 1e4 * np.sin(2 * np.pi * 3 * np.arange(200) / 200)  # about 1 m
+    with pytest.raises(FloatingPointError, match="max_abs=0.1"):
+        osc.simulate_fine(u, fs=200.0, periodic=True, max_abs=0.1)
+    with pytest.raises(FloatingPointError, match="max_abs=0.1"):
+        osc.simulate_fine(u, fs=200.0, periodic=False, max_abs=0.1)
+    assert osc.simulate_fine(u, fs=200.0, periodic=True, max_abs=10.0).n_periods >= 2
+
+
 def test_periodic_steady_state_equals_long_run_from_rest():
     osc = bouc_wen_oscillator()
     n = 512

@@ -74,6 +74,26 @@ def _positive_real(name, value, *, allow_zero=False):
     return float(value)
 
 
+def _check_bound(y, max_abs):
+    """Raise when a displacement record exceeds ``max_abs`` (None: no bound)."""
+    if max_abs is not None and np.max(np.abs(y)) > max_abs:
+        raise FloatingPointError(
+            f"the displacement exceeded max_abs={max_abs:g} (peak {np.max(np.abs(y)):g}): the response runs away."
+        )
+
+
+def _futile(changes, tol, periods_left):
+    """Whether plain periods whose changes shrink as ``changes`` do cannot
+    settle to ``tol`` in ``periods_left`` more: the rate is read over the
+    last two periods.  A neutral mode (a hysteresis without dissipation
+    shifts its loop freely) or a chaotic response then stops at once
+    instead of running to ``max_periods``, which it would reach unsettled."""
+    if len(changes) < 3 or changes[-3] <= 0:
+        return False
+    rate = np.sqrt(changes[-1] / changes[-3])
+    return rate >= 1.0 or changes[-1] * rate**periods_left > tol
+
+
 def _check_decimation(decimation, oversampling):
     decimation = check_factors(decimation, "decimation")
     if int(np.prod(decimation)) != oversampling:
@@ -229,7 +249,7 @@ class Oscillator:
         return y, yd, z, int(n_failed)
 
     def simulate_fine(self, u_fine, *, fs, periodic, tol=1e-12, max_periods=200,
-                      initial_state=None, warn=True):
+                      initial_state=None, warn=True, max_abs=None):
         """Simulate at the integration rate and return all states.
 
         Parameters
@@ -261,6 +281,11 @@ class Oscillator:
         warn : bool, default=True
             Warn when the steady state is not reached (callers that check
             ``n_periods`` themselves turn it off).
+        max_abs : float, default=None
+            Raise ``FloatingPointError`` once the displacement exceeds this
+            bound (checked after each period, or at the end of a
+            non-periodic run).  A fit's trial point whose response runs away
+            is then rejected after one period, not after ``max_periods``.
 
         Returns
         -------
@@ -288,9 +313,11 @@ class Oscillator:
             # to supply the positions (e.g. a clock state set to zero).
             state = initial_state.copy()
             y, yd, z, n_failed = self._run(u_fine, n - 1, h, state, True, n)
+            _check_bound(y, max_abs)
             return FineSimulation(np.arange(n) * h, u_fine, y, yd, z, fs, 1, n_failed, state)
         if not periodic:
             y, yd, z, n_failed = self._run(u_fine, n - 1, h, state, True, n)
+            _check_bound(y, max_abs)
             return FineSimulation(np.arange(n) * h, u_fine, y, yd, z, fs, 1, n_failed, state)
         if self.time_varying:
             raise ValueError(
@@ -309,7 +336,7 @@ class Oscillator:
         # _shooting): a slowly decaying structure needs a handful of
         # periods instead of hundreds.
         shooter = PeriodShooter(lambda st, ini: self._run(u_fine, n, h, st, ini, n)[:3], state.size, nz)
-        period, resume = 0, None
+        period, resume, plain = 0, None, []
         while period < max_periods:
             start = state.copy()
             try:
@@ -323,9 +350,15 @@ class Oscillator:
             period += 1
             init = False
             total_failed += n_failed
-            if period > 1 and self._settled(start, state, y, yd, z, tol):
+            _check_bound(y, max_abs)
+            change = self._change(start, state, y, yd, z)
+            if period > 1 and change <= tol:
                 converged = True
                 break
+            if not shooter.active:
+                plain.append(change)
+                if _futile(plain, tol, max_periods - period):
+                    break
             if period >= _SHOOT_AFTER and period < max_periods:
                 shot, used = shooter.step(start, state, [y, yd] + [z[:, j] for j in range(nz)],
                                           max_periods - period - 1)
@@ -342,15 +375,13 @@ class Oscillator:
         return FineSimulation(np.arange(n) * h, u_fine, y, yd, z, fs, period, total_failed, state)
 
     @staticmethod
-    def _settled(start, end, y, yd, z, tol):
+    def _change(start, end, y, yd, z):
+        """Largest change of a position over one period, relative to its
+        peak over the period (the acceleration and the rates follow from
+        (y, yd, z) and u: no separate check)."""
         nz = z.shape[1]
         pairs = [(0, y), (1, yd)] + [(STATE_Z + j, z[:, j]) for j in range(nz)]
-        for idx, trace in pairs:
-            scale = np.max(np.abs(trace))
-            if abs(end[idx] - start[idx]) > tol * scale:
-                return False
-        # The acceleration and rates follow from (y, yd, z) and u: no separate check.
-        return True
+        return max(abs(end[idx] - start[idx]) / max(np.max(np.abs(trace)), 1e-300) for idx, trace in pairs)
 
     def simulate(self, u, *, fs, periodic, oversampling=20, decimation=(2, 2, 5),
                  noise_rms=0.0, random_state=None, u_fine=None):

@@ -152,12 +152,18 @@ class _Objective:
         self.signals, self.y_meas = signals, y_meas
         self.size = sum(y.size for y in y_meas)
         self.n_evaluations = 0
+        # A response this large misfits by more than the penalty whatever
+        # the data: stop its simulation at the first period that shows it
+        # (a hysteresis trial point running away to metres otherwise
+        # integrates every period allowed, most of a fit's time).
+        self.max_abs = 2 * _PENALTY * scales.displacement + max(np.max(np.abs(y)) for y in y_meas)
 
     def __call__(self, theta):
         self.n_evaluations += 1
         try:
             osc, transform, _ = effect_model(self.effect, theta, self.nominal, self.scales)
-            y_sim = simulate_signals(osc, self.signals, transform, max_periods=FIT_MAX_PERIODS)
+            y_sim = simulate_signals(osc, self.signals, transform, max_periods=FIT_MAX_PERIODS,
+                                     max_abs=self.max_abs)
         except (ValueError, FloatingPointError, ZeroDivisionError):
             return np.full(self.size, _PENALTY)
         r = np.concatenate([misfit(ys, ym, self.offsets) for ys, ym in zip(y_sim, self.y_meas)])

@@ -199,27 +199,27 @@ MAX_PERIODS = 30
 FIT_MAX_PERIODS = 15
 
 
-def _steady(osc, u_fine, fs_fine, max_periods=MAX_PERIODS):
+def _steady(osc, u_fine, fs_fine, max_periods=MAX_PERIODS, max_abs=None):
     return osc.simulate_fine(u_fine, fs=fs_fine, periodic=True, tol=STEADY_TOL, max_periods=max_periods,
-                             warn=False)
+                             warn=False, max_abs=max_abs)
 
 
-def _fine_response(osc, u_fine, P, fs_fine, transform, max_periods=MAX_PERIODS):
+def _fine_response(osc, u_fine, P, fs_fine, transform, max_periods=MAX_PERIODS, max_abs=None):
     """Displacement at the integration rate over the whole signal."""
     periodic = P > 0
     if transform is not None:
         u_fine = transform(u_fine, fs_fine, periodic)
     if not periodic:
-        return osc.simulate_fine(u_fine, fs=fs_fine, periodic=False).y
+        return osc.simulate_fine(u_fine, fs=fs_fine, periodic=False, max_abs=max_abs).y
     if not osc.time_varying:
-        return np.tile(_steady(osc, u_fine, fs_fine, max_periods).y, P)
-    start = _steady(_frozen(osc), u_fine, fs_fine, max_periods).final_state
+        return np.tile(_steady(osc, u_fine, fs_fine, max_periods, max_abs).y, P)
+    start = _steady(_frozen(osc), u_fine, fs_fine, max_periods, max_abs).final_state
     return osc.simulate_fine(np.tile(u_fine, P), fs=fs_fine, periodic=False,
-                             initial_state=_continuation_state(osc, start)).y
+                             initial_state=_continuation_state(osc, start), max_abs=max_abs).y
 
 
 def simulate_signals(osc, signals, transform=None, *, noise_rms=0.0, random_state=None,
-                     max_periods=MAX_PERIODS):
+                     max_periods=MAX_PERIODS, max_abs=None):
     """Simulate ``osc`` on every signal of a :class:`SignalSet`.
 
     Parameters
@@ -237,6 +237,10 @@ def simulate_signals(osc, signals, transform=None, *, noise_rms=0.0, random_stat
     max_periods : int, default=MAX_PERIODS
         Cap on the periods of each steady-state search (fits use
         ``FIT_MAX_PERIODS``).
+    max_abs : float, default=None
+        Displacement bound at the integration rate: a simulation that
+        exceeds it stops there with ``FloatingPointError`` (a fit's trial
+        point running away costs one period, not ``max_periods``).
 
     Returns
     -------
@@ -248,7 +252,7 @@ def simulate_signals(osc, signals, transform=None, *, noise_rms=0.0, random_stat
     fs_fine = signals.fs * signals.oversampling
     out = []
     for u_fine, P in zip(signals.u_fine, signals.n_periods):
-        y_fine = _fine_response(osc, u_fine, P, fs_fine, transform, max_periods)
+        y_fine = _fine_response(osc, u_fine, P, fs_fine, transform, max_periods, max_abs)
         if noise_rms > 0:
             y_fine = y_fine + band_limited_noise(y_fine.size, fs=fs_fine, f_max=signals.fs / 2,
                                                  rms=noise_rms, random_state=rng)
