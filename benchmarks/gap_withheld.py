@@ -30,9 +30,11 @@ simulator does not know.  Each writes
 """
 import argparse
 import json
+import subprocess
 import sys
 import time
 from collections import Counter
+from pathlib import Path
 
 import numpy as np
 from _bench_utils import RESULTS, header
@@ -59,6 +61,9 @@ NOISE = 8e-6  # the benchmark's output noise, m rms at 15 kHz
 NOMINAL = Oscillator(M, C, K)
 DURATION = 4 * PERIOD / FS
 VERBOSE = 0
+# the code that measured a case (a results file merged by --update holds several)
+COMMIT = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
+                        cwd=Path(__file__).parent).stdout.strip() or None
 
 
 def _clip(level):
@@ -240,8 +245,8 @@ def run_case(true_name, truth, seed, candidates, expected, n_jobs, family="e"):
     achievable = float(np.clip(1 - left.sum() / excess.sum(), -10, 1))
     correct = next((r for r in report.ranking if r.name == true_name), None)
     ok = report.best_effect in (expected if isinstance(expected, tuple) else (expected,))
-    row = dict(family=family, layout=layout, true=true_name, seed=seed, expected=expected, got=report.best_effect,
-               ok=ok, seconds=seconds, gap_db=report.gap_db,
+    row = dict(family=family, commit=COMMIT, layout=layout, true=true_name, seed=seed, expected=expected,
+               got=report.best_effect, ok=ok, seconds=seconds, gap_db=report.gap_db,
                nominal=[nominal.mass, nominal.damping, nominal.stiffness],
                noise_floor_db=report.noise_floor_db, noise_source=report.noise_source,
                black_box_closure=None if report.black_box is None else report.black_box["closure"],
@@ -319,6 +324,8 @@ def main(argv=None):
     parser.add_argument("--family", default="e", choices=sorted(FAMILIES),
                         help="; ".join(f"{k}: {v}" for k, v in FAMILIES.items()).replace("%", "%%"))
     parser.add_argument("--strengths", type=int, default=2, help="strengths per effect (1 or 2)")
+    parser.add_argument("--strength", type=int, choices=(1, 2), default=None,
+                        help="run only this strength (1 or 2); with --update, add it to the family's file")
     parser.add_argument("--only", nargs="*", default=None, help="true effects to run (names, 'null')")
     parser.add_argument("--no-removed", action="store_true",
                         help="skip the cases whose true effect is removed from the candidates")
@@ -330,7 +337,7 @@ def main(argv=None):
     global VERBOSE
     VERBOSE = int(args.verbose)
     seeds = [0] if args.quick else list(range(args.seeds))
-    n_strengths = 1 if args.quick else args.strengths
+    n_strengths = 1 if args.quick else (args.strength or args.strengths)
     rows = []
     jobs = []
     for name, strengths in CASES.items():
@@ -338,6 +345,8 @@ def main(argv=None):
         if args.only and label not in args.only:
             continue
         for s, truth in enumerate(strengths[:n_strengths]):
+            if args.strength is not None and s != args.strength - 1:
+                continue
             for seed in seeds:
                 jobs.append((name, truth, 100 * s + seed, None, expected_answer(args.family, name)))
     for name in [] if args.no_removed else REMOVED:
