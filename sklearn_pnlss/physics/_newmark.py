@@ -47,17 +47,21 @@ STATE_Y, STATE_YD, STATE_YDD, STATE_Z = 0, 1, 2, 3
 # --------------------------------------------------------------------------
 # Element kernels.  ``_xxx_force`` returns (F, dF/dy, dF/dyd) and fills
 # dF/dz; ``_xxx_rate`` fills g, dg/dy, dg/dyd and the square block dg/dz.
+# They read their parameters from ``p[o:]`` and their states from ``z[a:]``
+# and write at ``[a:]`` (``[a:, a:]`` for dg/dz) of the shared arrays: a
+# slice per element and call would cost a reference count each, which made
+# an element with internal states three times slower than one without.
 # --------------------------------------------------------------------------
 @njit(**_JIT)
-def _bouc_wen_force(p, y, yd, z, dfdz):
-    dfdz[0] = 1.0
-    return z[0], 0.0, 0.0
+def _bouc_wen_force(p, o, y, yd, z, a, dfdz):
+    dfdz[a] = 1.0
+    return z[a], 0.0, 0.0
 
 
 @njit(**_JIT)
-def _bouc_wen_rate(p, y, yd, z, g, dgdy, dgdyd, dgdz):
-    alpha, beta, gamma, delta, nu = p[0], p[1], p[2], p[3], p[4]
-    zz = z[0]
+def _bouc_wen_rate(p, o, y, yd, z, a, g, dgdy, dgdyd, dgdz):
+    alpha, beta, gamma, delta, nu = p[o], p[o + 1], p[o + 2], p[o + 3], p[o + 4]
+    zz = z[a]
     az = abs(zz)
     sz = np.sign(zz)
     if nu == 1.0:
@@ -68,32 +72,32 @@ def _bouc_wen_rate(p, y, yd, z, g, dgdy, dgdyd, dgdz):
         pow_nu1 = az ** (nu - 1.0)
         pow_nu = pow_nu1 * az
     ayd = abs(yd)
-    g[0] = alpha * yd - beta * (gamma * ayd * pow_nu1 * zz + delta * yd * pow_nu)
-    dgdy[0] = 0.0
-    dgdyd[0] = alpha - beta * (gamma * np.sign(yd) * pow_nu1 * zz + delta * pow_nu)
+    g[a] = alpha * yd - beta * (gamma * ayd * pow_nu1 * zz + delta * yd * pow_nu)
+    dgdy[a] = 0.0
+    dgdyd[a] = alpha - beta * (gamma * np.sign(yd) * pow_nu1 * zz + delta * pow_nu)
     # d(|z|^(nu-1) z)/dz = nu |z|^(nu-1);  d|z|^nu/dz = nu |z|^(nu-1) sign(z)
-    dgdz[0, 0] = -beta * nu * pow_nu1 * (gamma * ayd + delta * yd * sz)
+    dgdz[a, a] = -beta * nu * pow_nu1 * (gamma * ayd + delta * yd * sz)
 
 
 @njit(**_JIT)
-def _cubic_force(p, y, yd, z, dfdz):
-    return p[0] * y * y * y, 3.0 * p[0] * y * y, 0.0
+def _cubic_force(p, o, y, yd, z, a, dfdz):
+    return p[o] * y * y * y, 3.0 * p[o] * y * y, 0.0
 
 
 @njit(**_JIT)
-def _quadratic_force(p, y, yd, z, dfdz):
-    return p[0] * y * y, 2.0 * p[0] * y, 0.0
+def _quadratic_force(p, o, y, yd, z, a, dfdz):
+    return p[o] * y * y, 2.0 * p[o] * y, 0.0
 
 
 @njit(**_JIT)
-def _coulomb_force(p, y, yd, z, dfdz):
-    t = np.tanh(yd / p[1])
-    return p[0] * t, 0.0, p[0] * (1.0 - t * t) / p[1]
+def _coulomb_force(p, o, y, yd, z, a, dfdz):
+    t = np.tanh(yd / p[o + 1])
+    return p[o] * t, 0.0, p[o] * (1.0 - t * t) / p[o + 1]
 
 
 @njit(**_JIT)
-def _quadratic_damping_force(p, y, yd, z, dfdz):
-    return p[0] * yd * abs(yd), 0.0, 2.0 * p[0] * abs(yd)
+def _quadratic_damping_force(p, o, y, yd, z, a, dfdz):
+    return p[o] * yd * abs(yd), 0.0, 2.0 * p[o] * abs(yd)
 
 
 @njit(**_JIT)
@@ -108,49 +112,49 @@ def _softplus(x, s):
 
 
 @njit(**_JIT)
-def _dead_zone_force(p, y, yd, z, dfdz):
-    kb, gap, s = p[0], p[1], p[2]
+def _dead_zone_force(p, o, y, yd, z, a, dfdz):
+    kb, gap, s = p[o], p[o + 1], p[o + 2]
     up, dup = _softplus(y - gap, s)
     down, ddown = _softplus(-y - gap, s)
     return kb * (up - down), kb * (dup + ddown), 0.0
 
 
 @njit(**_JIT)
-def _coupled_mass_force(p, y, yd, z, dfdz):
-    c2, k2 = p[1], p[2]
-    dfdz[0] = -k2
-    dfdz[1] = -c2
-    return k2 * (y - z[0]) + c2 * (yd - z[1]), k2, c2
+def _coupled_mass_force(p, o, y, yd, z, a, dfdz):
+    c2, k2 = p[o + 1], p[o + 2]
+    dfdz[a] = -k2
+    dfdz[a + 1] = -c2
+    return k2 * (y - z[a]) + c2 * (yd - z[a + 1]), k2, c2
 
 
 @njit(**_JIT)
-def _coupled_mass_rate(p, y, yd, z, g, dgdy, dgdyd, dgdz):
-    m2, c2, k2 = p[0], p[1], p[2]
-    g[0] = z[1]
-    g[1] = (k2 * (y - z[0]) + c2 * (yd - z[1])) / m2
-    dgdy[0] = 0.0
-    dgdy[1] = k2 / m2
-    dgdyd[0] = 0.0
-    dgdyd[1] = c2 / m2
-    dgdz[0, 0] = 0.0
-    dgdz[0, 1] = 1.0
-    dgdz[1, 0] = -k2 / m2
-    dgdz[1, 1] = -c2 / m2
+def _coupled_mass_rate(p, o, y, yd, z, a, g, dgdy, dgdyd, dgdz):
+    m2, c2, k2 = p[o], p[o + 1], p[o + 2]
+    g[a] = z[a + 1]
+    g[a + 1] = (k2 * (y - z[a]) + c2 * (yd - z[a + 1])) / m2
+    dgdy[a] = 0.0
+    dgdy[a + 1] = k2 / m2
+    dgdyd[a] = 0.0
+    dgdyd[a + 1] = c2 / m2
+    dgdz[a, a] = 0.0
+    dgdz[a, a + 1] = 1.0
+    dgdz[a + 1, a] = -k2 / m2
+    dgdz[a + 1, a + 1] = -c2 / m2
 
 
 @njit(**_JIT)
-def _drift_force(p, y, yd, z, dfdz):
-    # z[0] is the clock: the stiffness is k + rate * t.
-    dfdz[0] = p[0] * y
-    return p[0] * z[0] * y, p[0] * z[0], 0.0
+def _drift_force(p, o, y, yd, z, a, dfdz):
+    # z[a] is the clock: the stiffness is k + rate * t.
+    dfdz[a] = p[o] * y
+    return p[o] * z[a] * y, p[o] * z[a], 0.0
 
 
 @njit(**_JIT)
-def _clock_rate(p, y, yd, z, g, dgdy, dgdyd, dgdz):
-    g[0] = 1.0
-    dgdy[0] = 0.0
-    dgdyd[0] = 0.0
-    dgdz[0, 0] = 0.0
+def _clock_rate(p, o, y, yd, z, a, g, dgdy, dgdyd, dgdz):
+    g[a] = 1.0
+    dgdy[a] = 0.0
+    dgdyd[a] = 0.0
+    dgdz[a, a] = 0.0
 
 
 @njit(**_JIT)
@@ -165,38 +169,42 @@ custom_force = no_custom
 
 
 @njit(**_JIT)
-def _force(kind, p, y, yd, z, dfdz):
+def _force(kind, p, o, end, y, yd, z, a, dfdz):
+    """Force of the element of ``kind`` whose parameters are ``p[o:end]``
+    and whose states start at ``z[a]``."""
     if kind == KIND_BOUC_WEN:
-        return _bouc_wen_force(p, y, yd, z, dfdz)
+        return _bouc_wen_force(p, o, y, yd, z, a, dfdz)
     elif kind == KIND_CUBIC_STIFFNESS:
-        return _cubic_force(p, y, yd, z, dfdz)
+        return _cubic_force(p, o, y, yd, z, a, dfdz)
     elif kind == KIND_QUADRATIC_STIFFNESS:
-        return _quadratic_force(p, y, yd, z, dfdz)
+        return _quadratic_force(p, o, y, yd, z, a, dfdz)
     elif kind == KIND_COULOMB_FRICTION:
-        return _coulomb_force(p, y, yd, z, dfdz)
+        return _coulomb_force(p, o, y, yd, z, a, dfdz)
     elif kind == KIND_QUADRATIC_DAMPING:
-        return _quadratic_damping_force(p, y, yd, z, dfdz)
+        return _quadratic_damping_force(p, o, y, yd, z, a, dfdz)
     elif kind == KIND_DEAD_ZONE_SPRING:
-        return _dead_zone_force(p, y, yd, z, dfdz)
+        return _dead_zone_force(p, o, y, yd, z, a, dfdz)
     elif kind == KIND_COUPLED_MASS:
-        return _coupled_mass_force(p, y, yd, z, dfdz)
+        return _coupled_mass_force(p, o, y, yd, z, a, dfdz)
     elif kind == KIND_STIFFNESS_DRIFT:
-        return _drift_force(p, y, yd, z, dfdz)
+        return _drift_force(p, o, y, yd, z, a, dfdz)
     elif kind == KIND_CUSTOM:
-        return custom_force(int(p[0]), p[1:], y, yd)
+        # a user's function sees its own parameters only
+        return custom_force(int(p[o]), p[o + 1:end], y, yd)
     return np.nan, np.nan, np.nan  # unknown kind: poison the result, never hang
 
 
 @njit(**_JIT)
-def _rate(kind, p, y, yd, z, g, dgdy, dgdyd, dgdz):
+def _rate(kind, p, o, y, yd, z, a, b, g, dgdy, dgdyd, dgdz):
+    """Rates of the element's states ``z[a:b]``."""
     if kind == KIND_BOUC_WEN:
-        _bouc_wen_rate(p, y, yd, z, g, dgdy, dgdyd, dgdz)
+        _bouc_wen_rate(p, o, y, yd, z, a, g, dgdy, dgdyd, dgdz)
     elif kind == KIND_COUPLED_MASS:
-        _coupled_mass_rate(p, y, yd, z, g, dgdy, dgdyd, dgdz)
+        _coupled_mass_rate(p, o, y, yd, z, a, g, dgdy, dgdyd, dgdz)
     elif kind == KIND_STIFFNESS_DRIFT:
-        _clock_rate(p, y, yd, z, g, dgdy, dgdyd, dgdz)
+        _clock_rate(p, o, y, yd, z, a, g, dgdy, dgdyd, dgdz)
     else:
-        for j in range(g.shape[0]):
+        for j in range(a, b):
             g[j] = np.nan
 
 
@@ -279,16 +287,31 @@ def _solve_inplace(a, b, n):
 
 
 @njit(**_JIT)
+def _solve2_inplace(a, b):
+    """``_solve_inplace`` for n = 2 (one internal state), the same
+    operations in the same order, unrolled."""
+    if abs(a[1, 0]) > abs(a[0, 0]):
+        a00, a01, b0, a10, a11, b1 = a[1, 0], a[1, 1], b[1], a[0, 0], a[0, 1], b[0]
+    else:
+        a00, a01, b0, a10, a11, b1 = a[0, 0], a[0, 1], b[0], a[1, 0], a[1, 1], b[1]
+    f = a10 / a00
+    if f != 0.0:
+        a11 -= f * a01
+        b1 -= f * b0
+    b[1] = b1 / a11
+    b[0] = (b0 - a01 * b[1]) / a00
+
+
+@njit(**_JIT)
 def _total_force_and_rates(kinds, p_off, params, z_off, y, yd, z, zd, dfdz, dgdy, dgdyd, dgdz):
     """Sum of element forces at (y, yd, z); fills the state rates zd."""
     total = 0.0
     for e in range(kinds.shape[0]):
         a, b = z_off[e], z_off[e + 1]
-        pe = params[p_off[e]:p_off[e + 1]]
-        f, _, _ = _force(kinds[e], pe, y, yd, z[a:b], dfdz[a:b])
+        f, _, _ = _force(kinds[e], params, p_off[e], p_off[e + 1], y, yd, z, a, dfdz)
         total += f
         if b > a:
-            _rate(kinds[e], pe, y, yd, z[a:b], zd[a:b], dgdy[a:b], dgdyd[a:b], dgdz[a:b, a:b])
+            _rate(kinds[e], params, p_off[e], y, yd, z, a, b, zd, dgdy, dgdyd, dgdz)
     return total
 
 
@@ -332,6 +355,7 @@ def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
     dgdy = np.zeros(nz)
     dgdyd = np.zeros(nz)
     dgdz = np.zeros((nz, nz))
+    zq = np.zeros(nz)  # the states of the Newton iterate q
 
     if init_accel:
         # Start from equilibrium of the equation of motion at t = 0.
@@ -375,18 +399,17 @@ def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
                     jac[r, j] = 0.0
             res[0] = m * ydd1 + c * yd1 + k * y1 - u1
             jac[0, 0] = jac_lin
+            for j in range(nz):
+                zq[j] = q[1 + j]
             for e in range(kinds.shape[0]):
                 a, b = z_off[e], z_off[e + 1]
-                pe = params[p_off[e]:p_off[e + 1]]
-                ze = q[1 + a:1 + b]
-                f, dfdy, dfdyd = _force(kinds[e], pe, y1, yd1, ze, dfdz[a:b])
+                f, dfdy, dfdyd = _force(kinds[e], params, p_off[e], p_off[e + 1], y1, yd1, zq, a, dfdz)
                 res[0] += f
                 jac[0, 0] += dfdy + dfdyd * c_vel
                 for j in range(a, b):
                     jac[0, 1 + j] = dfdz[j]
                 if b > a:
-                    _rate(kinds[e], pe, y1, yd1, ze, g[a:b], dgdy[a:b], dgdyd[a:b],
-                          dgdz[a:b, a:b])
+                    _rate(kinds[e], params, p_off[e], y1, yd1, zq, a, b, g, dgdy, dgdyd, dgdz)
                     for j in range(a, b):
                         res[1 + j] = q[1 + j] - z[j] - 0.5 * h * (zd[j] + g[j])
                         jac[1 + j, 0] = -0.5 * h * (dgdy[j] + dgdyd[j] * c_vel)
@@ -397,6 +420,8 @@ def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
                 res[j] = -res[j]
             if n == 1:
                 res[0] /= jac[0, 0]
+            elif n == 2:
+                _solve2_inplace(jac, res)
             else:
                 _solve_inplace(jac, res, n)
             ok = True
@@ -450,8 +475,7 @@ def stateless_forces(kinds, p_off, params, z_off, y, yd):
     for e in range(kinds.shape[0]):
         if z_off[e + 1] > z_off[e]:
             continue
-        pe = params[p_off[e]:p_off[e + 1]]
         for i in range(y.shape[0]):
-            f, _, _ = _force(kinds[e], pe, y[i], yd[i], empty, dfdz)
+            f, _, _ = _force(kinds[e], params, p_off[e], p_off[e + 1], y[i], yd[i], empty, 0, dfdz)
             out[i] += f
     return out
