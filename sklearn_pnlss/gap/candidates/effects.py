@@ -18,14 +18,13 @@ from ...physics.forces import (
     CoupledMass,
     CubicStiffness,
     CustomForce,
-    DeadZoneSpring,
     ForceElement,
     QuadraticDamping,
     QuadraticStiffness,
     StiffnessDrift,
 )
 from ...physics.oscillator import Oscillator
-from .clues import backlash_start, force_law_start
+from .clues import backlash_spring, backlash_start, force_law_start
 from .stiffness_start import recalibration_start, second_mode_joint_start, second_mode_start
 
 __all__ = ["Scales", "Effect", "default_effects", "make_effect", "recalibration_effect", "BUILT_IN",
@@ -175,8 +174,7 @@ def _quadratic_damping(theta, nominal, s):
 def _backlash(theta, nominal, s):
     kb = theta[0] * s.stiffness
     gap = theta[1] * s.displacement
-    return _no_input([DeadZoneSpring(kb, gap, max(gap, 1e-3 * s.displacement) / 20)],
-                     dict(kb=kb, gap=gap))
+    return _no_input([backlash_spring(kb, gap, s.displacement)], dict(kb=kb, gap=gap))
 
 
 def _second_mode(theta, nominal, s):

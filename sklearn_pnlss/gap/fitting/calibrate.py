@@ -257,7 +257,8 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
     start = time.perf_counter()
     obj = _Objective(effect, nominal, scales, signals, y_meas, offsets)
     lower, upper = effect.bounds
-    starts = [np.clip(s, lower, upper) for s in effect.starts] + effect.data_starts(clues, nominal, scales)
+    data_starts = effect.data_starts(clues, nominal, scales)
+    starts = [np.clip(s, lower, upper) for s in effect.starts] + data_starts
     costs = [np.sum(obj(s) ** 2) for s in starts]
     theta = starts[int(np.argmin(costs))]
     converged, message = True, "nothing to fit"
@@ -281,15 +282,23 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
             n_evaluations += obj.n_evaluations + 2
         except (ValueError, FloatingPointError):
             pass  # keep the coarse estimate
-        r = obj(theta)
+        coarse_cost = np.sum(obj(theta) ** 2)
         fine_obj = _Objective(effect, nominal, scales, fine_signals, y_meas, offsets)
-        r_fine = fine_obj(theta)
-        if np.mean(r_fine**2) > FINE_MISMATCH * np.mean(r**2):
+        # The data's own starts, read off the measured motion, hold at any
+        # rate; the coarse optimum may not.
+        fine_starts = [theta] + data_starts
+        fine_costs = [np.sum(fine_obj(t) ** 2) for t in fine_starts]
+        best = int(np.argmin(fine_costs))
+        if best > 0 or fine_costs[0] > FINE_MISMATCH * coarse_cost:
             # The coarse rate's correction no longer holds: a strong
             # nonlinearity whose steady state (or a sweep's jump) depends on
-            # the integration rate settles on another branch at each rate.
-            # Refine at the reporting rate itself.
-            theta, converged, message, _ = _solve(fine_obj, theta, lower, upper, max(3, max_nfev // 4), ftol)
+            # the integration rate settles on another branch at each rate,
+            # or its minimum is a valley narrower than the correction's
+            # reach (a stiff backlash: 1e-4 wide in the spring rate, moved
+            # by 2e-3 at a fifth of the rate).  Fit at the reporting rate
+            # itself, from the better of the coarse optimum and the data's
+            # starts.
+            theta, converged, message, _ = _solve(fine_obj, fine_starts[best], lower, upper, max_nfev, ftol)
         n_evaluations += fine_obj.n_evaluations
         obj = fine_obj
     r = obj(theta)
