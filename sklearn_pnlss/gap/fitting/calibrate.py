@@ -25,6 +25,8 @@ _FD_STEP = 1e-5
 #: Training error at the reporting rate over the defect-corrected coarse
 #: one above which the fit is refined at the reporting rate (3 dB).
 FINE_MISMATCH = 2.0
+#: Data starts (the best at the coarse rate) tried again at the reporting rate.
+FINE_DATA_STARTS = 3
 
 
 @dataclass
@@ -114,10 +116,10 @@ def with_recalibration(effect, recalibration):
             # simulation error picks among the starts
             for subset in dict.fromkeys((free, tuple(p for p in free if p != "mass"), ())):
                 joint = effect.joint_start(clues, nominal, scales, subset)
-                if joint is not None:
+                for row in [] if joint is None else np.atleast_2d(joint):  # a joint start may give several
                     theta = np.zeros(n + len(free))
-                    theta[:n] = joint[:n]
-                    theta[[n + free.index(p) for p in subset]] = joint[n:]
+                    theta[:n] = row[:n]
+                    theta[[n + free.index(p) for p in subset]] = row[n:]
                     starts.append(theta)
         return np.array(starts)
 
@@ -285,8 +287,10 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
         coarse_cost = np.sum(obj(theta) ** 2)
         fine_obj = _Objective(effect, nominal, scales, fine_signals, y_meas, offsets)
         # The data's own starts, read off the measured motion, hold at any
-        # rate; the coarse optimum may not.
-        fine_starts = [theta] + data_starts
+        # rate; the coarse optimum may not.  (The few best at the coarse
+        # rate: a profile gives dozens.)
+        by_cost = np.argsort(costs[len(effect.starts):])[:FINE_DATA_STARTS]
+        fine_starts = [theta] + [data_starts[i] for i in by_cost]
         fine_costs = [np.sum(fine_obj(t) ** 2) for t in fine_starts]
         best = int(np.argmin(fine_costs))
         if best > 0 or fine_costs[0] > FINE_MISMATCH * coarse_cost:
