@@ -187,6 +187,34 @@ def test_backlash_start_with_an_off_nominal():
     assert abs(fixed[1] * disp / 1e-3 - 1) > 0.1 or abs(fixed[0] * scales.stiffness / 2e4 - 1) > 0.1
 
 
+def test_a_joint_start_with_the_mass_freed_is_profiled_along_the_mass():
+    """The missing force determines the mass worst, and the spring rate and
+    the stiffness follow its error: with the mass freed, the joint start
+    comes with a profile of starts solved with the mass held at steps of
+    0.5 % (of the nominal mass) up to 8 % either side; the one at the true
+    mass has the true spring rate and stiffness (the simulation error picks
+    it in the fit)."""
+    from sklearn_pnlss.gap.candidates.clues import MASS_PROFILE
+
+    real = TRUE.with_forces([DeadZoneSpring(2e4, 1e-3)])
+    u, y, _, _ = gap_data(real, seed=3)
+    nominal = Oscillator(1.7, 13.0, 4e4)
+    train = SignalSet.from_signals(u, N, FS, 10)
+    clues = read_clues(nominal, u, y, simulate_signals(nominal, train), train.n_periods, N, FS)
+    disp = float(np.std(np.concatenate(y)))
+    scales = Scales(force=50.0, displacement=disp, velocity=0.1, duration=2.7, u_peak=150.0, fs=FS)
+    rows = backlash_start(clues, scales, nominal=nominal, free=("mass", "damping", "stiffness"))
+    assert rows.shape == (1 + MASS_PROFILE.size, 5)
+    np.testing.assert_allclose(rows[1:, 2] - rows[0, 2], MASS_PROFILE, atol=1e-12)
+    mass = nominal.mass * (1 + rows[:, 2])
+    kb, gap = rows[:, 0] * scales.stiffness, rows[:, 1] * disp
+    stiffness = nominal.stiffness + rows[:, 4] * scales.stiffness
+    assert np.ptp(kb) > 0.1 * 2e4 and np.ptp(stiffness) > 0.05 * 5e4  # the ridge the mass's error moves along
+    at_true = np.argmin(np.abs(mass - 2.0))
+    assert kb[at_true] == pytest.approx(2e4, rel=0.01) and stiffness[at_true] == pytest.approx(5e4, rel=0.01)
+    assert gap[at_true] == pytest.approx(1e-3, rel=0.02)
+
+
 def test_second_mode_joint_start_with_an_off_nominal():
     """A mode at 60 Hz under a nominal 20 % too stiff and 20 % too heavy:
     solved together with the nominal errors, the mode's frequency and mass
