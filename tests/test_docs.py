@@ -327,6 +327,10 @@ def _n_decoupled(r, d, n=3, m=1):
     return (2 * n + m + d) * r
 
 
+def _mass_profile():
+    return importlib.import_module("sklearn_pnlss.gap.candidates.clues").MASS_PROFILE
+
+
 def _source_of(module, snippet):
     """1 when ``snippet`` is in the module's source: a setting of a benchmark
     or a literal of the code, quoted in the docs."""
@@ -544,6 +548,12 @@ FIGURES = [
            lambda: [_gap_default("oversampling")]),
     Figure(GAP, "smoothed over 1 % of the rms velocity", "sklearn_pnlss/gap/effects.py",
            lambda: [_source_of("sklearn_pnlss.gap.candidates.effects", "CoulombFriction(fc, 0.01 * s.velocity)")]),
+    Figure(GAP, "with the mass held at steps of 0.5 % up to 8 % either side of their own",
+           "gap.candidates.clues.MASS_PROFILE",
+           lambda: [round(100 * min(b - a for a, b in zip(_mass_profile(), _mass_profile()[1:])), 6),
+                    round(100 * max(_mass_profile()), 6)]),
+    Figure(GAP, "a stiff backlash under a nominal 10-30 % off", "gap_withheld.py --family b",
+           lambda: [10 * _source_of("benchmarks/gap_withheld.py", "rng.uniform(0.1, 0.3, 3)"), 30]),
     Figure(GAP, "``fit_oversampling`` (5)", "GapDiagnosis's fit_oversampling default",
            lambda: [_gap_default("fit_oversampling")]),
     Figure(GAP, "a cubic stiffness from noiseless data to within 0.01 %, ``tests/test_gap_calibrate.py``;",
