@@ -11,6 +11,10 @@ __all__ = ["linear_nominal"]
 
 #: Segment length of the Welch estimate for data without a period.
 WELCH_SEGMENT = 4096
+#: Longest channel delay looked for when the FRF is no oscillator's, samples.
+MAX_DELAY_SAMPLES = 10
+#: Rms relative FRF error under which an oscillator read through a delay is taken.
+DELAYED_FIT_TOL = 0.1
 
 
 def _frf(u_list, y_list, period):
@@ -40,7 +44,9 @@ def linear_nominal(X, y, *, fs, period=None, f_band=None):
     structure this is the nominal an engineer reads off a test: it carries
     the average effect of the nonlinearity at the test level (a hardening
     spring raises ``k``), which is why :class:`GapDiagnosis` refits it with
-    every candidate.
+    every candidate.  When no oscillator fits without it, a delay between
+    the channels (up to ``MAX_DELAY_SAMPLES``) is fitted too: a sensor's
+    delay turns the phase faster than any oscillator's.
 
     Parameters
     ----------
@@ -82,11 +88,29 @@ def linear_nominal(X, y, *, fs, period=None, f_band=None):
         w, G = w[keep], G[keep]
     if w.size < 3:
         raise ValueError("fewer than 3 excited lines in f_band: widen f_band or excite the band.")
-    # (k - m w^2 + i c w) G = 1, in k, m, c: relative FRF error
-    A = np.stack([G, -w**2 * G, 1j * w * G], axis=1)
-    k, m, c = np.linalg.lstsq(np.vstack([A.real, A.imag]), np.concatenate([np.ones(w.size), np.zeros(w.size)]),
-                              rcond=None)[0]
+    (k, m, c), _ = _oscillator_fit(w, G, 0.0)
     if min(k, m, c) <= 0:
-        raise ValueError(f"the measured FRF is not that of a damped oscillator (m = {m:.3g}, c = {c:.3g}, "
-                         f"k = {k:.3g}): check the channels, or give the band of the first mode as f_band.")
+        # A delay between the channels (a sensor, an anti-alias filter)
+        # turns the phase faster than any oscillator's: read the oscillator
+        # with the delay that fits best (the diagnosis finds the delay
+        # itself as the channels' ``input_delay``).
+        fits = [_oscillator_fit(w, G, tau) for tau in np.linspace(0.0, MAX_DELAY_SAMPLES / fs, 201)[1:]]
+        # an oscillator that fits (10 % rms relative FRF error at most), not
+        # one a delay merely makes positive (a sign error of a channel)
+        damped = [f for f in fits if min(f[0]) > 0 and f[1] < DELAYED_FIT_TOL**2 * w.size]
+        if not damped:
+            raise ValueError(f"the measured FRF is not that of a damped oscillator (m = {m:.3g}, c = {c:.3g}, "
+                             f"k = {k:.3g}), even with a channel delay of up to {MAX_DELAY_SAMPLES} samples: "
+                             "check the channels, or give the band of the first mode as f_band.")
+        k, m, c = min(damped, key=lambda f: f[1])[0]
     return Oscillator(float(m), float(c), float(k))
+
+
+def _oscillator_fit(w, G, delay):
+    """``(k, m, c)`` with ``(k - m w^2 + i c w) G e^{i w delay} = 1`` in
+    the least-squares sense (relative FRF error), and its residual."""
+    Gd = G * np.exp(1j * w * delay)
+    A = np.stack([Gd, -w**2 * Gd, 1j * w * Gd], axis=1)
+    A, b = np.vstack([A.real, A.imag]), np.concatenate([np.ones(w.size), np.zeros(w.size)])
+    theta = np.linalg.lstsq(A, b, rcond=None)[0]
+    return theta, float(np.sum((A @ theta - b) ** 2))
