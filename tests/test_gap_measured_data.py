@@ -178,18 +178,24 @@ def test_recalibration_text_names_moved_parameters_only():
     assert text == ", with damping recalibrated by -14 %, stiffness by -4 %, a channel delay of 1.3 ms"
 
 
+def _backlash_clues(nominal):
+    """The clues and scales of a dead-zone spring (2e4 N/m beyond 1 mm) on
+    the true structure, read against ``nominal``."""
+    u, y, _, _ = gap_data(TRUE.with_forces([DeadZoneSpring(2e4, 1e-3)]), seed=3)
+    train = SignalSet.from_signals(u, N, FS, 10)
+    clues = read_clues(nominal, u, y, simulate_signals(nominal, train), train.n_periods, N, FS)
+    disp = float(np.std(np.concatenate(y)))
+    return clues, Scales(force=50.0, displacement=disp, velocity=0.1, duration=2.7, u_peak=150.0, fs=FS)
+
+
 def test_backlash_start_with_an_off_nominal():
     """A dead-zone spring on a structure whose nominal stiffness is 20 %
     low and damping 30 % high: with those freed, the missing-force solve
     finds the clearance and the spring rate (to 5 %) and the stiffness
     error; the fixed-nominal solve misreads them."""
-    real = TRUE.with_forces([DeadZoneSpring(2e4, 1e-3)])
-    u, y, _, _ = gap_data(real, seed=3)
     nominal = Oscillator(2.0, 13.0, 4e4)
-    train = SignalSet.from_signals(u, N, FS, 10)
-    clues = read_clues(nominal, u, y, simulate_signals(nominal, train), train.n_periods, N, FS)
-    disp = float(np.std(np.concatenate(y)))
-    scales = Scales(force=50.0, displacement=disp, velocity=0.1, duration=2.7, u_peak=150.0, fs=FS)
+    clues, scales = _backlash_clues(nominal)
+    disp = scales.displacement
     theta = backlash_start(clues, scales, nominal=nominal, free=("damping", "stiffness"))
     kb, gap = theta[0] * scales.stiffness, theta[1] * disp
     assert kb == pytest.approx(2e4, rel=0.05) and gap == pytest.approx(1e-3, rel=0.05)
@@ -207,13 +213,9 @@ def test_a_joint_start_with_the_mass_freed_is_profiled_along_the_mass():
     it in the fit)."""
     from sklearn_pnlss.gap.candidates.clues import MASS_PROFILE
 
-    real = TRUE.with_forces([DeadZoneSpring(2e4, 1e-3)])
-    u, y, _, _ = gap_data(real, seed=3)
     nominal = Oscillator(1.7, 13.0, 4e4)
-    train = SignalSet.from_signals(u, N, FS, 10)
-    clues = read_clues(nominal, u, y, simulate_signals(nominal, train), train.n_periods, N, FS)
-    disp = float(np.std(np.concatenate(y)))
-    scales = Scales(force=50.0, displacement=disp, velocity=0.1, duration=2.7, u_peak=150.0, fs=FS)
+    clues, scales = _backlash_clues(nominal)
+    disp = scales.displacement
     rows = backlash_start(clues, scales, nominal=nominal, free=("mass", "damping", "stiffness"))
     assert rows.shape == (1 + MASS_PROFILE.size, 5)
     np.testing.assert_allclose(rows[1:, 2] - rows[0, 2], MASS_PROFILE, atol=1e-12)
