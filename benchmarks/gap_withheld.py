@@ -283,7 +283,8 @@ def _merged(rows, args):
         return rows
 
     def key(r):
-        return str(r["true"]), r["seed"], str(r["expected"])
+        # as the file holds it: a tuple of answers comes back as a list
+        return str(r["true"]), r["seed"], json.dumps(r["expected"])
 
     fresh = {key(r): r for r in rows}
     old = json.loads(path.read_text())["rows"]
