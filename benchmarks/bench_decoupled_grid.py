@@ -62,7 +62,7 @@ def main(argv=None):
 
     from sklearn_pnlss import DecoupledPNLSSRegressor, PNLSSRegressor
     from sklearn_pnlss.datasets import load_bouc_wen_official, make_bouc_wen
-    from sklearn_pnlss.model_selection import held_out_signals, mean_rms_db_scorer
+    from sklearn_pnlss.model_selection import held_out_signals, mean_rms_db_scorer, worst_rms_db_scorer
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--data-dir", default=str(DEFAULT_DATA))
@@ -85,7 +85,8 @@ def main(argv=None):
     X, y, cv = held_out_signals(X_train, y_train, [official.X_test_multisine[0], official.X_test_sweep[0]],
                                 [official.y_test_multisine[0], official.y_test_sweep[0]])
     n_train = len(X_train)
-    scoring = {"mean": mean_rms_db_scorer, "multisine": _signal_scorer(0), "sweep": _signal_scorer(1)}
+    scoring = {"mean": mean_rms_db_scorer, "worst": worst_rms_db_scorer, "multisine": _signal_scorer(0),
+               "sweep": _signal_scorer(1)}
     with tempfile.TemporaryDirectory() as cache:
         pipe = Pipeline([
             ("pnlss", PNLSSRegressor(3, degrees=(2, 3), variables="states_inputs", period=P, max_iter=200)),
@@ -103,12 +104,13 @@ def main(argv=None):
         t_grid = time.perf_counter() - t0
         full = PNLSSRegressor(3, degrees=(2, 3), variables="states_inputs", period=P, max_iter=200).fit(X_train, y_train)
     res = search.cv_results_
-    ms, sw = -res["mean_test_multisine"], -res["mean_test_sweep"]
+    ms, sw, worst = -res["mean_test_multisine"], -res["mean_test_sweep"], -res["mean_test_worst"]
     rows = []
     for i, params in enumerate(res["params"]):
         r, d = params["dec__n_branches"], params["dec__degree"]
         rows.append({"n_branches": r, "degree": d, "n_nonlinear_params": _n_nonlinear(r, d),
-                     "db_multisine": float(ms[i]), "db_sweep": float(sw[i]), "fit_s": float(res["mean_fit_time"][i])})
+                     "db_multisine": float(ms[i]), "db_sweep": float(sw[i]),
+                     "db_worse_signal": float(worst[i]), "fit_s": float(res["mean_fit_time"][i])})
     full_ms = -full.score(official.X_test_multisine, official.y_test_multisine)
     full_sw = -full.score(official.X_test_sweep, official.y_test_sweep)
 
@@ -132,8 +134,9 @@ def main(argv=None):
     beats = [x for x in finite if x["db_multisine"] <= full_ms and x["db_sweep"] <= full_sw]
     small = [x for x in finite if x["n_nonlinear_params"] <= SMALL]
     best_small = min(small, key=lambda x: x["db_multisine"] + x["db_sweep"]) if small else None
-    # For a target on both signals: the candidate whose worse signal is best.
-    best_small_worst = min(small, key=lambda x: max(x["db_multisine"], x["db_sweep"])) if small else None
+    # For a target on both signals: the candidate whose worse signal is best
+    # (what GridSearchCV(scoring=worst_rms_db_scorer) would pick).
+    best_small_worst = min(small, key=lambda x: x["db_worse_signal"]) if small else None
     for what, row in (("best (mean of both)", best), (f"best of at most {SMALL} nonlinear parameters (mean of both)",
                                                        best_small),
                       (f"best of at most {SMALL} nonlinear parameters (worse signal)", best_small_worst)):

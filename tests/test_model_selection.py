@@ -6,7 +6,8 @@ from joblib import parallel_backend
 from sklearn.model_selection import GridSearchCV
 
 from sklearn_pnlss import PNLSSRegressor
-from sklearn_pnlss.model_selection import held_out_signals, mean_rms_db_scorer
+from sklearn_pnlss.metrics import rms_error
+from sklearn_pnlss.model_selection import held_out_signals, mean_rms_db_scorer, worst_rms_db_scorer
 from sklearn_pnlss.signals import multisine, swept_sine
 from sklearn_pnlss.statespace.monomials import monomial_exponents
 from sklearn_pnlss.statespace.pnlss import PNLSSModel
@@ -83,3 +84,19 @@ def test_refit_after_a_held_out_search_trains_on_the_training_signals_only():
         np.testing.assert_array_equal(a, b)
     # The refitted model scores on the test signals what the search measured.
     assert mean_rms_db_scorer(search.best_estimator_, X_test, y[3:]) == pytest.approx(search.best_score_, abs=1e-9)
+
+
+def test_the_worst_signal_scorer_ranks_by_the_signal_a_model_misses_most():
+    """A target on every test signal ("-100 dB on the multisine and on the
+    sweep") ranks candidates by their worse signal, not their mean."""
+    X, y, cv = _train_test()
+    train, test = cv[0]
+    model = PNLSSRegressor(2, period=N, variables="states", max_iter=20).fit(X[:3], y[:3])
+    X_test, y_test = [X[i] for i in test], [y[i] for i in test]
+    per_signal = [rms_error(t, p, db=True) for t, p in zip(y_test, model.predict(X_test))]
+    assert worst_rms_db_scorer(model, X_test, y_test) == pytest.approx(-max(per_signal), abs=1e-12)
+    assert mean_rms_db_scorer(model, X_test, y_test) == pytest.approx(-np.mean(per_signal), abs=1e-12)
+    # The model is exact on the sweep but leaves its trusted range for a few
+    # samples of the multisine: the mean of the two hides that miss.
+    assert per_signal[1] < -200 and per_signal[0] > -60
+    assert worst_rms_db_scorer(model, X_test, y_test) < mean_rms_db_scorer(model, X_test, y_test) - 50
