@@ -2,8 +2,10 @@
 known parameters of simulated oscillators are recovered."""
 import numpy as np
 import pytest
+from scipy.optimize import least_squares
 
-from sklearn_pnlss.gap.fitting.calibrate import effect_model, fit_effect, meaningful_ftol, with_recalibration
+from sklearn_pnlss.gap.fitting.calibrate import (_Objective, _refit_without_jumps, _solve, effect_model, fit_effect,
+                                                 jumped_signals, meaningful_ftol, with_recalibration)
 from sklearn_pnlss.gap.candidates.effects import Effect, Scales, delay_signal, make_effect
 from sklearn_pnlss.gap.verdict.noise_floor import NoiseFloor
 from sklearn_pnlss.gap.fitting.simulate import SignalSet, simulate_signals
@@ -139,3 +141,57 @@ def test_meaningful_ftol():
     assert meaningful_ftol(noise, 10_000) == pytest.approx(8e-4)
     assert meaningful_ftol(noise, 10**12) == 1e-8
     assert meaningful_ftol(None, 10_000) == 1e-8
+
+
+def test_jumped_signals_are_those_far_above_the_median():
+    assert jumped_signals([1.0, 1.2, 0.9, 30.0]) == [3]
+    assert jumped_signals([1.0, 1.2, 0.9, 5.0]) == []  # 7 dB: not a jump
+    assert jumped_signals([1.0, 100.0]) == []  # two signals: no median to go by
+
+
+class _JumpingObjective:
+    """Residuals of four training signals in one parameter: three smooth
+    (zero at theta = 1), the fourth on another branch with an erratic
+    misfit unless theta is within 1e-3 of 1 (a steady state that jumps)."""
+
+    def __init__(self, index=(0, 1, 2, 3), bias=0.0):
+        self.index, self.bias, self.n_evaluations = list(index), bias, 0
+        self.y_meas = [np.zeros(50) for _ in self.index]
+
+    def __call__(self, theta):
+        self.n_evaluations += 1
+        t = float(theta[0])
+        out = []
+        for i in self.index:
+            r = (t - 1.0) * np.linspace(1.0, 2.0, 50)
+            if i == 3:
+                r = r + self.bias + (0.0 if abs(t - 1.0) < 1e-3 else 0.3 * np.sin(1e5 * t + np.arange(50)))
+            out.append(r)
+        return np.concatenate(out)
+
+    def subset(self, index):
+        return _JumpingObjective([self.index[i] for i in index], self.bias)
+
+    per_signal_mse = _Objective.per_signal_mse
+
+    def jacobian(self, theta, r0, lower, upper):
+        step = 1e-5
+        return ((self(theta + step) - r0) / step)[:, None]
+
+
+def test_a_fit_stalled_by_a_jumping_signal_is_refitted_without_it():
+    lower, upper = np.array([0.0]), np.array([2.0])
+    stalled = _solve(_JumpingObjective(), np.array([1.005]), lower, upper, 30, 1e-10)[0]
+    assert abs(stalled[0] - 1.0) > 4e-3  # on all four signals the trust region stays where it started
+    theta, refit, n_used = _refit_without_jumps(_JumpingObjective(), stalled, lower, upper, 30, 1e-10)
+    assert refit is not None and theta[0] == pytest.approx(1.0, abs=1e-6)
+    assert n_used > 2
+    # A signal that misfits for another reason (a bias no parameter
+    # explains) is no jump to leave out: the refit without it raises the
+    # cost on all signals, so theta is kept.
+    obj = _JumpingObjective(bias=1.0)
+    start = np.array([1.0005])  # the needle, where signal 3 is smooth
+    best = least_squares(lambda t: obj(t), start, bounds=(0.99905, 1.00095)).x
+    assert obj.per_signal_mse(best)[3] > 10 * np.median(obj.per_signal_mse(best))
+    theta, refit, _ = _refit_without_jumps(obj, best, lower, upper, 30, 1e-10)
+    assert refit is None and theta[0] == best[0]
