@@ -373,7 +373,7 @@ R, CONV, PN, DEC, SEL, CLI, GAP = ("README.md", "docs/user_guide/conventions.rst
                                    "docs/user_guide/decoupling.rst", "docs/user_guide/selection.rst",
                                    "docs/user_guide/command_line.rst", "docs/user_guide/gap.rst")
 GRID = "bench_decoupled_grid.py: decoupled_grid.json"
-GRID_60 = "bench_decoupled_grid.py --seed 0..4 --max-params 60: decoupled_grid_60_seed*.json"
+GRID_60 = "bench_decoupled_grid.py --seed 0..9 --max-params 60: decoupled_grid_60_seed*.json"
 STEPS = "bench_step_basis.py: step_basis.json"
 BOUNDED = "bench_bounded.py: bounded.json"
 ACCURACY = "bench_pnlss.py --accuracy: pnlss.json"
@@ -518,7 +518,7 @@ FIGURES = [
     Figure(DEC, "--branches 2 3 4 --degrees 7 8 9 10 11 12 13 --max-params 60 --max-iter 300`` fits every "
                 "candidate of at most 60 nonlinear parameters from the same full model (five starts each)", GRID_60,
            lambda: [2, 3, 4, 7, 8, 9, 10, 11, 12, 13, 60, 300, 60]
-           if all(_results(f"decoupled_grid_60_seed{s}")["n_init"] == 5 for s in range(5)) else [-1]),
+           if all(_results(f"decoupled_grid_60_seed{s}")["n_init"] == 5 for s in range(10)) else [-1]),
     # Draws 3 and 4 ran beside another grid (two fits per core): timed on 0-2.
     Figure(DEC, "about 6 minutes per draw on 2 cores", GRID_60,
            lambda: [max(_results(f"decoupled_grid_60_seed{s}")["grid_time_s"] for s in range(3)) / 60, 2],
@@ -528,13 +528,22 @@ FIGURES = [
         "1 - r = 3, d = 13 (60): -100.73 / -105.33 dB - the same",
         "2 - r = 3, d = 13 (60): -101.01 / -104.67 dB - the same",
         "3 - r = 3, d = 13 (60): -101.95 / -104.49 dB - the same",
-        "4 - r = 3, d = 13 (60): -100.59 / -105.42 dB - the same"])),
-    Figure(DEC, "On each of the five draws, a model of at most 60 nonlinear parameters reaches -100 dB on both "
+        "4 - r = 3, d = 13 (60): -100.59 / -105.42 dB - the same",
+        "5 - r = 3, d = 13 (60): -101.70 / -105.04 dB - the same",
+        "6 - r = 3, d = 13 (60): -101.32 / -105.60 dB - the same",
+        "7 - r = 3, d = 13 (60): -100.55 / -103.37 dB - the same",
+        "8 - r = 3, d = 13 (60): -101.11 / -104.16 dB - the same",
+        "9 - r = 3, d = 13 (60): -102.08 / -105.93 dB - the same"])),
+    Figure(DEC, "On each of the ten draws, a model of at most 60 nonlinear parameters reaches -100 dB on both "
                 "official test signals when the candidates are ranked by their worse signal (9.45e-6 m on the "
-                "multisine at worst); ranked by the mean of both, draw 0 misses it by 0.25 dB", GRID_60,
-           lambda: [60 if all(max(_grid_60(s)[1][3:]) <= -100 for s in range(5)) else -1, -100,
-                    10 ** (max(_grid_60(s)[1][3] for s in range(5)) / 20),
-                    0, _grid_60(0)[0][3] + 100]),
+                "multisine at worst)", GRID_60,
+           lambda: [60 if all(max(_grid_60(s)[1][3:]) <= -100 for s in range(10)) else -1, -100,
+                    10 ** (max(_grid_60(s)[1][3] for s in range(10)) / 20)]),
+    Figure(DEC, "the mean of both, draw 0 misses it by 0.25 dB", GRID_60,
+           lambda: [0 if [s for s in range(10) if max(_grid_60(s)[0][3:]) > -100] == [0] else -1,
+                    _grid_60(0)[0][3] + 100]),
+    Figure(DEC, "Draws 5 to 9 were run after the worse-signal rule was chosen on draws 0 to 4", GRID_60,
+           lambda: [5, 9, 0, 4]),
     Figure(DEC, "the best published decoupled PNLSS model reaches -97.5 dB and the best published model of any "
                 "kind -102.5 dB", "the benchmark's table of published results (Iacob et al. 2025)",
            lambda: [-97.5, -102.5]),
