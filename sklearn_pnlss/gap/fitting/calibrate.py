@@ -250,8 +250,10 @@ def _refit_without_jumps(obj, theta, lower, upper, max_nfev, ftol):
         return theta, None, 1
     sub = obj.subset([i for i in range(mse.size) if i not in jumped])
     refit, converged, message, _ = _solve(sub, theta, lower, upper, max_nfev, ftol)
-    better = np.sum(obj(refit) ** 2) < np.sum(mse * [y.size for y in obj.y_meas])
-    return (refit, (converged, message), sub.n_evaluations + 2) if better else (theta, None, sub.n_evaluations + 2)
+    n_used = sub.n_evaluations + 2  # and the two full-set costs
+    if np.sum(obj(refit) ** 2) < np.sum(mse * [y.size for y in obj.y_meas]):
+        return refit, (converged, message), n_used
+    return theta, None, n_used
 
 
 def meaningful_ftol(noise, n_samples):
