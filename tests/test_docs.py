@@ -298,14 +298,22 @@ def _gap_withheld():
 
 def _family(family):
     """A gap_withheld.py family's results (``--family``; e: the clean
-    family's ``--quick`` run): right effects, effect cases, whether the case
+    family, gap_withheld.json): right effects, effect cases, whether the case
     without an effect was answered right, median seconds per diagnosis."""
-    rows = _results("gap_withheld_quick" if family == "e" else f"gap_withheld_family_{family}")["rows"]
+    rows = _results("gap_withheld" if family == "e" else f"gap_withheld_family_{family}")["rows"]
     effects = [r for r in rows if r["true"] is not None and r["expected"] != "unexplained"]
     null = [r for r in rows if r["true"] is None]
     median = sorted(r["seconds"] for r in rows)[len(rows) // 2] if len(rows) % 2 else \
         sum(sorted(r["seconds"] for r in rows)[len(rows) // 2 - 1:len(rows) // 2 + 1]) / 2
     return sum(r["ok"] for r in effects), len(effects), bool(null) and all(r["ok"] for r in null), median
+
+
+def _closures_vs_achievable():
+    """The clean family's two lowest closures against the achievable, in %,
+    and a floor under the others (the third lowest, rounded down)."""
+    values = sorted(100 * r["closure_vs_achievable"] for r in _results("gap_withheld")["rows"]
+                    if r["closure_vs_achievable"] is not None)
+    return [values[0], values[1], __import__("math").floor(10 * values[2]) / 10]
 
 
 def _stiff_backlash(family):
@@ -613,14 +621,6 @@ FIGURES = [
     Figure(GAP, "its responses are so sensitive that no candidate closes 90 % of the gap",
            "gap.verdict.decision.EXPLAINED_CLOSURE",
            lambda: [100 * importlib.import_module("sklearn_pnlss.gap.verdict.decision").EXPLAINED_CLOSURE]),
-    Figure(GAP, "names the right effect in 11 of 11 effect cases, raises no false alarm, says "
-                "``\"unexplained\"`` in 3 of 3 removed-effect cases, and takes 103 s per diagnosis (median)",
-           "gap_withheld.py --family e --quick: gap_withheld_quick.json",
-           lambda: [*_family("e")[:2], 3 if all(_results("gap_withheld_quick")["summary"]["unexplained_ok"])
-                    and len(_results("gap_withheld_quick")["summary"]["unexplained_ok"]) == 3 else -1, 3,
-                    _family("e")[3]], slack=1.0),
-    Figure(GAP, "(``--quick``: one strength, one seed, 15 cases)", "gap_withheld.py --quick",
-           lambda: [len(_results("gap_withheld_quick")["rows"])]),
     Figure(GAP, "(a) the nominal read off the BLA of the same data (:func:`~sklearn_pnlss.gap.linear_nominal`), "
                 "at both strengths of every effect (23 cases): the right effect in 22 of 22 effect cases, no false "
                 "alarm, 79 s per diagnosis (median); the stiff backlash closes 100.0 % with the nominal's mass, "
@@ -682,22 +682,20 @@ FIGURES = [
     Figure(GAP, "(``python benchmarks/gap_withheld.py``, 52 cases, two cores)", WITHHELD,
            lambda: [len(_results("gap_withheld")["rows"])
                     if _results("gap_withheld")["environment"]["cpu_count"] == 2 else -1]),
-    Figure(GAP, "the right effect in 42 of 44 effect cases (95 %)", WITHHELD,
+    Figure(GAP, "the right effect in 44 of 44 effect cases (100 %)", WITHHELD,
            lambda: [sum(r["ok"] for r in _gap_withheld()[1]), len(_gap_withheld()[1]),
                     100 * _results("gap_withheld")["summary"]["effect_accuracy"]]),
     Figure(GAP, "(stiffness +5 %; stiffness −5 % with damping +30 %)", "benchmarks/gap_withheld.py",
            lambda: [5 * _source_of("benchmarks/gap_withheld.py", '"stiffness": 1.05 * K'),
                     -5 * _source_of("benchmarks/gap_withheld.py", '"stiffness": 0.95 * K, "damping": 1.3 * C'), 30]),
-    Figure(GAP, "where it is found, the correct effect closes at least 99.3 % of the achievable closure", WITHHELD,
-           lambda: [100 * _results("gap_withheld")["summary"]["min_closure_vs_achievable"]]),
-    Figure(GAP, "(a 3e4 N/m spring beyond a 2.5 mm clearance, at a 2.6 mm rms response)",
+    Figure(GAP, "where it is found, the correct effect closes at least 90.3 % of the achievable closure (90.3 % and "
+                "91.9 %, the strong cubic spring; every other case 99.7 % or more)", WITHHELD,
+           lambda: [100 * _results("gap_withheld")["summary"]["min_closure_vs_achievable"], *_closures_vs_achievable()]),
+    Figure(GAP, "(a 3e4 N/m spring beyond a 2.5 mm clearance, at a 2.6 mm rms response,",
            "benchmarks/gap_withheld.py (its case, and the rms of its simulated training response)",
            lambda: [3e4 * _source_of("benchmarks/gap_withheld.py", "DeadZoneSpring(3e4, 2.5e-3)"), 2.5,
                     1e3 * _withheld_backlash_rms()]),
-    Figure(GAP, "closes only 49-51 % of the gap", WITHHELD,
-           lambda: [100 * min(r["correct_closure"] for r in _gap_withheld()[2]),
-                    100 * max(r["correct_closure"] for r in _gap_withheld()[2])]),
-    Figure(GAP, "50 s per diagnosis (median), 106 s at most", WITHHELD,
+    Figure(GAP, "75 s per diagnosis (median), 163 s at most (the stronger backlash)", WITHHELD,
            lambda: [_results("gap_withheld")["summary"]["median_seconds"],
                     _results("gap_withheld")["summary"]["max_seconds"]], slack=1.0),
 ]
