@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from scipy.optimize import least_squares
 
-from sklearn_pnlss.gap.fitting.calibrate import (_Objective, _refit_without_jumps, _solve, effect_model, fit_effect,
-                                                 jumped_signals, meaningful_ftol, with_recalibration)
+from sklearn_pnlss.gap.fitting.calibrate import (_refit_without_jumps, _solve, effect_model, fit_effect, jumped_signals,
+                                                 meaningful_ftol, per_signal_mse, with_recalibration)
 from sklearn_pnlss.gap.candidates.effects import Effect, Scales, delay_signal, make_effect
 from sklearn_pnlss.gap.verdict.noise_floor import NoiseFloor
 from sklearn_pnlss.gap.fitting.simulate import SignalSet, simulate_signals
@@ -172,8 +172,6 @@ class _JumpingObjective:
     def subset(self, index):
         return _JumpingObjective([self.index[i] for i in index], self.bias)
 
-    per_signal_mse = _Objective.per_signal_mse
-
     def jacobian(self, theta, r0, lower, upper):
         step = 1e-5
         return ((self(theta + step) - r0) / step)[:, None]
@@ -183,7 +181,8 @@ def test_a_fit_stalled_by_a_jumping_signal_is_refitted_without_it():
     lower, upper = np.array([0.0]), np.array([2.0])
     stalled = _solve(_JumpingObjective(), np.array([1.005]), lower, upper, 30, 1e-10)[0]
     assert abs(stalled[0] - 1.0) > 4e-3  # on all four signals the trust region stays where it started
-    theta, refit, n_used = _refit_without_jumps(_JumpingObjective(), stalled, lower, upper, 30, 1e-10)
+    obj = _JumpingObjective()
+    theta, _, refit, n_used = _refit_without_jumps(obj, stalled, obj(stalled), lower, upper, 30, 1e-10)
     assert refit is not None and theta[0] == pytest.approx(1.0, abs=1e-6)
     assert n_used > 2
     # A signal that misfits for another reason (a bias no parameter
@@ -192,6 +191,7 @@ def test_a_fit_stalled_by_a_jumping_signal_is_refitted_without_it():
     obj = _JumpingObjective(bias=1.0)
     start = np.array([1.0005])  # the needle, where signal 3 is smooth
     best = least_squares(lambda t: obj(t), start, bounds=(0.99905, 1.00095)).x
-    assert obj.per_signal_mse(best)[3] > 10 * np.median(obj.per_signal_mse(best))
-    theta, refit, _ = _refit_without_jumps(obj, best, lower, upper, 30, 1e-10)
+    mse = per_signal_mse(obj(best), obj.y_meas)
+    assert mse[3] > 10 * np.median(mse)
+    theta, _, refit, _ = _refit_without_jumps(obj, best, obj(best), lower, upper, 30, 1e-10)
     assert refit is None and theta[0] == best[0]

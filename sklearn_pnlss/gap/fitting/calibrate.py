@@ -182,11 +182,6 @@ class _Objective:
         return _Objective(self.effect, self.nominal, self.scales, self.signals.subset(index),
                           [self.y_meas[i] for i in index], self.offsets)
 
-    def per_signal_mse(self, theta):
-        """Mean squared residual of each training signal at ``theta``."""
-        r = self(theta)
-        return np.array([np.mean(part**2) for part in np.split(r, np.cumsum([y.size for y in self.y_meas])[:-1])])
-
     def jacobian(self, theta, r0, lower, upper):
         J = np.empty((r0.size, theta.size))
         for i in range(theta.size):
@@ -220,6 +215,12 @@ def _solve(obj, theta0, lower, upper, max_nfev, ftol):
     return res.x, res.status > 0, res.message, float(np.sum(fun(res.x) ** 2))
 
 
+def per_signal_mse(r, y_meas):
+    """Mean squared residual of each training signal, ``r`` being the
+    residuals of all of them in order (their lengths those of ``y_meas``)."""
+    return np.array([np.mean(part**2) for part in np.split(r, np.cumsum([y.size for y in y_meas])[:-1])])
+
+
 def jumped_signals(mse, ratio=JUMP_RATIO):
     """Indices of the training signals whose mean squared misfit ``mse`` is
     ``ratio`` times the median signal's or more (empty with fewer than
@@ -230,10 +231,11 @@ def jumped_signals(mse, ratio=JUMP_RATIO):
     return [int(i) for i in np.flatnonzero(mse >= ratio * np.median(mse))]
 
 
-def _refit_without_jumps(obj, theta, lower, upper, max_nfev, ftol):
-    """``theta`` refitted on the training signals that did not jump, kept
-    when it lowers the cost on all of them: ``(theta, (converged, message)
-    of the refit or None, simulations used)``.
+def _refit_without_jumps(obj, theta, r, lower, upper, max_nfev, ftol):
+    """``theta`` (residuals ``r``) refitted on the training signals that did
+    not jump, kept when it lowers the cost on all of them: ``(theta, its
+    residuals, (converged, message) of the refit or None, simulations
+    used)``.
 
     A response that jumps between coexisting steady states (a stiff spring
     engaging beyond a clearance) makes the simulation error a needle: 0.1 %
@@ -244,16 +246,16 @@ def _refit_without_jumps(obj, theta, lower, upper, max_nfev, ftol):
     parameters reach it, and the jumped signal then settles where the data
     did (measured: -67 -> -103 dB on that signal, the noise floor).
     """
-    mse = obj.per_signal_mse(theta)
-    jumped = jumped_signals(mse)
+    jumped = jumped_signals(per_signal_mse(r, obj.y_meas))
     if not jumped:
-        return theta, None, 1
-    sub = obj.subset([i for i in range(mse.size) if i not in jumped])
+        return theta, r, None, 0
+    sub = obj.subset([i for i in range(len(obj.y_meas)) if i not in jumped])
     refit, converged, message, _ = _solve(sub, theta, lower, upper, max_nfev, ftol)
-    n_used = sub.n_evaluations + 2  # and the two full-set costs
-    if np.sum(obj(refit) ** 2) < np.sum(mse * [y.size for y in obj.y_meas]):
-        return refit, (converged, message), n_used
-    return theta, None, n_used
+    r_refit = obj(refit)
+    n_used = sub.n_evaluations + 1  # and the refit's cost on all signals
+    if np.sum(r_refit**2) < np.sum(r**2):
+        return refit, r_refit, (converged, message), n_used
+    return theta, r, None, n_used
 
 
 def meaningful_ftol(noise, n_samples):
@@ -354,11 +356,11 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
             theta, converged, message, _ = _solve(fine_obj, fine_starts[best], lower, upper, max_nfev, ftol)
         n_evaluations += fine_obj.n_evaluations
         obj = fine_obj
+    r = obj(theta)
     if effect.n_params:
-        theta, refit, n_used = _refit_without_jumps(obj, theta, lower, upper, max_nfev, ftol)
+        theta, r, refit, n_used = _refit_without_jumps(obj, theta, r, lower, upper, max_nfev, ftol)
         converged, message = refit or (converged, message)
         n_evaluations += n_used
-    r = obj(theta)
     mse = float(np.mean(r**2)) * scales.displacement**2
     _, _, physical = effect_model(effect, theta, nominal, scales)
     return EffectFit(effect, theta, physical, mse, n_evaluations, bool(converged), str(message),
