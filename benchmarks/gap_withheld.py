@@ -244,8 +244,14 @@ def run_case(true_name, truth, seed, candidates, expected, n_jobs, family="e"):
     excess = 10 * np.log10(np.maximum(before / noise, 1 + 1e-12))
     left = 10 * np.log10(np.maximum(oracle, noise) / noise)
     achievable = float(np.clip(1 - left.sum() / excess.sum(), -10, 1))
-    correct = next((r for r in report.ranking if r.name == true_name), None)
     ok = report.best_effect in (expected if isinstance(expected, tuple) else (expected,))
+    if true_name == "input_delay" and report.best_effect == "recalibration":
+        # under a nominal that is off, a delay is named with the recalibration
+        ok = ok and "delay_s" in report.decision.recalibrated
+    # the candidate that carries the true effect: the one named when right
+    # (in family d the sensor's delay rides with the recalibration)
+    carrier = report.best_effect if ok and true_name is not None else true_name
+    correct = next((r for r in report.ranking if r.name == carrier), None)
     row = dict(family=family, commit=COMMIT, layout=layout, true=true_name, seed=seed, expected=expected,
                got=report.best_effect, ok=ok, seconds=seconds, gap_db=report.gap_db,
                nominal=[nominal.mass, nominal.damping, nominal.stiffness],
@@ -312,12 +318,19 @@ def _write(rows, args):
 
 def expected_answer(family, name):
     """The right answers of a case: the effect, except where the family's
-    nominal already holds it or its data add a measurement delay."""
+    nominal already holds it or its data add a measurement delay.
+
+    A channel delay under a nominal that is off is named with the
+    recalibration (``recalibration, with stiffness recalibrated by +5 %, a
+    channel delay of 1.24 ms``); a delay alone is ``input_delay``.
+    """
     if family == "a" and name in (None, "recalibration"):
         return (None, "recalibration")  # the BLA nominal is the true linear one, to the noise
-    if family == "b" and name is None:
+    if family == "a" and name == "input_delay":
+        return ("input_delay", "recalibration")  # the BLA's oscillator may be off by half a percent
+    if family == "b" and name in (None, "input_delay"):
         return "recalibration"
-    if family == "d" and name in (None, "recalibration", "input_delay"):
+    if family == "d" and name in (None, "input_delay"):
         return ("input_delay",)  # the sensor delay, named as the channels' delay
     return name
 

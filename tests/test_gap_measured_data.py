@@ -123,6 +123,37 @@ def test_offsets_and_a_sensor_delay_are_not_blamed_on_physics():
     assert "a channel delay of 1.33 ms" in str(report)
 
 
+@pytest.mark.parametrize("stiffness, expected", [(1.05 * 5e4, "recalibration"), (5e4, "input_delay")])
+def test_a_nominal_error_seen_through_a_sensor_delay_is_a_recalibration(stiffness, expected):
+    """A one-sample sensor delay on data whose stiffness is 5 % above the
+    nominal's: the verdict is ``recalibration``, naming the stiffness and
+    the channel delay (the refit without the delay leaves it far above the
+    noise, and ``input_delay`` is no separate candidate once the delay is
+    the chain's).  With the nominal right, the delay alone is
+    ``input_delay``."""
+    real = Oscillator(2.0, 10.0, stiffness)
+    delay = 1.0 / FS
+
+    def sensor(u, fs, periodic):
+        return delay_signal(u, delay * fs, periodic)
+
+    u, y, u_val, y_val = gap_data(real, seed=4, transform=sensor)
+    diag = GapDiagnosis(TRUE, effects=EFFECTS + ["input_delay"], **FAST).fit(u, y)
+    report = diag.report(u_val, y_val)
+    assert diag.delay_ is not None and diag.delay_["delay_s"] == pytest.approx(delay, rel=0.02)
+    assert report.best_effect == expected
+    assert report.ranking[0].closure > 0.95
+    names = [r.name for r in report.ranking]
+    assert names.count("recalibration") == 1
+    if expected == "recalibration":
+        assert "input_delay" not in names
+        assert report.ranking[0].params["stiffness"] == pytest.approx(stiffness, rel=2e-3)
+        assert report.decision.recalibrated["delay_s"] == pytest.approx(delay, rel=0.02)
+        assert str(report).splitlines()[2] == "verdict: recalibration, with stiffness recalibrated by +5 %, a channel delay of 1.33 ms"
+    else:
+        assert report.ranking[0].params["delay_s"] == pytest.approx(delay, rel=0.02)
+
+
 def test_a_delay_hidden_behind_a_dominant_backlash_is_found():
     """A backlash dominates the gap: the nominal refit gains under 1 dB
     from a one-sample sensor delay, so the first look misses it, yet the

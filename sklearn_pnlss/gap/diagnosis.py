@@ -21,7 +21,7 @@ from .verdict.decision import decide
 from .candidates.effects import (NOMINAL_PARAMETERS, Scales, default_effects, delay_signal, make_effect,
                                  recalibration_effect)
 from .verdict.noise_floor import estimate_noise, non_excited_noise, repeated_input_noise, residual_noise
-from .report import GapReport
+from .report import RECALIBRATION_SHOWN, GapReport
 from .fitting.simulate import SignalSet, detect_period, misfit, simulate_signals
 from .where import locate_gap, signal_derivative
 
@@ -378,6 +378,7 @@ class GapDiagnosis(BaseEstimator):
                 clues = aligned_clues(self.delay_["delay_s"])
                 effects = [e if e.name in done else with_delay(e, make_effect("input_delay"), self.delay_["theta"])
                            for e in effects]
+                effects = self._recalibration_with_delay(effects, done)
         tasks = {e.name: fit_task(e, clues) for e in effects if e.name not in done}
         if self.black_box:
             tasks[_BLACK_BOX] = delayed(fit_black_box)(u_list, y_centred, self.period, self.random_state, 1)
@@ -422,6 +423,32 @@ class GapDiagnosis(BaseEstimator):
         if gain_db < DELAY_FOUND_DB:
             return None
         return dict(theta=float(delay.theta[0]), delay_s=float(delay.physical["delay_s"]), gain_db=float(gain_db))
+
+    def _recalibration_with_delay(self, effects, done):
+        """The candidates once the first look has found a channel delay
+        (``done`` is updated in place).
+
+        The delay is the measurement chain's, so the nominal's own error is
+        the refit *with* it: when that refit moved a nominal parameter by
+        ``RECALIBRATION_SHOWN`` or more, it becomes ``recalibration`` (the
+        verdict names the parameters and the channel delay) and
+        ``input_delay`` leaves the candidates: a stiffness 5 % off seen
+        through a sensor's delay is a recalibration, not a delay with a side
+        note.  The refit without the delay, left far above the noise, is no
+        candidate any more.  When nothing moved, the delay alone explains
+        the nominal's error and is reported as ``input_delay``.
+        """
+        refit = done["input_delay"]
+        moved = [name for name in self._free_nominal()
+                 if abs(refit.physical[name] / getattr(self.nominal, name) - 1) >= RECALIBRATION_SHOWN]
+        if not moved:
+            return effects
+        recal = next(e for e in effects if e.is_recalibration)
+        relabelled = replace(refit.effect, name=recal.name, is_recalibration=True,
+                             description=recal.description + ", with the channels' delay")
+        done[recal.name] = replace(refit, effect=relabelled)
+        del done["input_delay"]
+        return [relabelled if e.is_recalibration else e for e in effects if e.name != "input_delay"]
 
     def _hidden_delay(self, effects, done, first, fit_task, run, aligned_clues):
         """Look for a channel delay behind a dominant nonlinearity; the
@@ -599,15 +626,16 @@ class GapDiagnosis(BaseEstimator):
 
     def _recalibrated(self, decision):
         """Relative change of each freed nominal parameter in the chosen
-        candidate's fit (empty when it is ``recalibration`` itself, whose
-        values are its parameters, or nothing was freed)."""
+        candidate's fit (``recalibration`` included: the verdict says which
+        parameter was off), and the channel delay fitted with it, in
+        seconds; empty when nothing was freed."""
         chosen = next((f for f in self.fits_ if f.effect.name == decision.best_effect), None)
-        if chosen is None or chosen.effect.is_recalibration:
+        if chosen is None:
             return {}
         moved = {name: float(chosen.physical[name] / getattr(self.nominal, name) - 1)
                  for name in self._free_nominal() if name in chosen.physical and getattr(self.nominal, name)}
-        if self.delay_ is not None and chosen.effect.name != "input_delay":
-            moved["delay_s"] = float(chosen.physical["delay_s"])  # seconds, not relative
+        if "delay_s" in chosen.physical and chosen.effect.name != "input_delay":
+            moved["delay_s"] = float(chosen.physical["delay_s"])  # the measurement chain's, not relative
         return moved
 
     def report(self, X_val, y_val):
