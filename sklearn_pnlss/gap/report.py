@@ -125,9 +125,10 @@ class GapReport:
         lines.append(f"  noise: {self.noise_detail}")
         if self.decision.sensitive_signals:
             which = ", ".join(str(i) for i in self.decision.sensitive_signals)
-            lines.append(f"  validation signal {which} left out: a one-in-a-million change of the best "
-                         f"candidate's parameters moves its simulation above the noise (a chaotic response "
-                         f"or a jump); no simulator can follow it sample by sample")
+            lines.append(f"  validation signal {which} left out: the best candidate's parameters, moved within "
+                         f"what the training data determine (their standard errors), move its simulation "
+                         f"above the noise (a chaotic response or a jump); no simulator can follow it sample "
+                         f"by sample")
         if self.black_box is not None:
             head = f"black box (decoupled PNLSS, {self.black_box['n_params']} parameters): "
             if np.isfinite(self.black_box["gap_after_db"]):
