@@ -101,17 +101,23 @@ def test_force_law_start_solves_effect_and_nominal_errors_together(duffing):
     assert any(np.allclose(start, theta) for start in joint.data_starts(clues, nominal, scales))
 
 
+#: A sensor's delay of one sample on the displacement channel.
+SENSOR_DELAY = 1.0 / FS
+
+
+def _one_sample_late(real, seed):
+    """``gap_data`` of ``real`` with the displacement ``SENSOR_DELAY`` late
+    (for a time-invariant structure, the input delayed)."""
+    return gap_data(real, seed=seed, transform=lambda u, fs, periodic: delay_signal(u, SENSOR_DELAY * fs, periodic))
+
+
 def test_offsets_and_a_sensor_delay_are_not_blamed_on_physics():
     """Offsets on both channels and a one-sample delay of the displacement:
     the cubic spring is still named, the delay is found (to 2 %) and said,
     and the offsets cost nothing."""
     real = TRUE.with_forces([CubicStiffness(1e8)])
-    delay = 1.0 / FS
-
-    def sensor(u, fs, periodic):
-        return delay_signal(u, delay * fs, periodic)
-
-    u, y, u_val, y_val = gap_data(real, seed=2, transform=sensor)
+    delay = SENSOR_DELAY
+    u, y, u_val, y_val = _one_sample_late(real, seed=2)
     u, u_val = [x + 2.0 for x in u], [x + 2.0 for x in u_val]
     y, y_val = [x + 3e-4 for x in y], [x + 3e-4 for x in y_val]
     diag = GapDiagnosis(TRUE, effects=EFFECTS + ["input_delay"], **FAST).fit(u, y)
@@ -132,12 +138,8 @@ def test_a_nominal_error_seen_through_a_sensor_delay_is_a_recalibration(stiffnes
     the chain's).  With the nominal right, the delay alone is
     ``input_delay``."""
     real = Oscillator(2.0, 10.0, stiffness)
-    delay = 1.0 / FS
-
-    def sensor(u, fs, periodic):
-        return delay_signal(u, delay * fs, periodic)
-
-    u, y, u_val, y_val = gap_data(real, seed=4, transform=sensor)
+    delay = SENSOR_DELAY
+    u, y, u_val, y_val = _one_sample_late(real, seed=4)
     diag = GapDiagnosis(TRUE, effects=EFFECTS + ["input_delay"], **FAST).fit(u, y)
     report = diag.report(u_val, y_val)
     assert diag.delay_ is not None and diag.delay_["delay_s"] == pytest.approx(delay, rel=0.02)
@@ -149,7 +151,8 @@ def test_a_nominal_error_seen_through_a_sensor_delay_is_a_recalibration(stiffnes
         assert "input_delay" not in names
         assert report.ranking[0].params["stiffness"] == pytest.approx(stiffness, rel=2e-3)
         assert report.decision.recalibrated["delay_s"] == pytest.approx(delay, rel=0.02)
-        assert str(report).splitlines()[2] == "verdict: recalibration, with stiffness recalibrated by +5 %, a channel delay of 1.33 ms"
+        assert str(report).splitlines()[2] == ("verdict: recalibration, with stiffness recalibrated by +5 %, "
+                                               "a channel delay of 1.33 ms")
     else:
         assert report.ranking[0].params["delay_s"] == pytest.approx(delay, rel=0.02)
 
@@ -162,12 +165,8 @@ def test_a_delay_hidden_behind_a_dominant_backlash_is_found():
     rate and clearance recovered (measured: 48 dB gain, 100 %, both within
     0.1 %)."""
     real = TRUE.with_forces([DeadZoneSpring(1e4, 1.5e-3)])
-    delay = 1.0 / FS
-
-    def sensor(u, fs, periodic):
-        return delay_signal(u, delay * fs, periodic)
-
-    u, y, u_val, y_val = gap_data(real, seed=3, transform=sensor)
+    delay = SENSOR_DELAY
+    u, y, u_val, y_val = _one_sample_late(real, seed=3)
     diag = GapDiagnosis(TRUE, effects=EFFECTS + ["input_delay"], **FAST).fit(u, y)
     report = diag.report(u_val, y_val)
     first_look = next(f for f in diag.fits_ if f.effect.name == "input_delay")
