@@ -163,7 +163,9 @@ class GapDiagnosis(BaseEstimator):
         model's residual at the lines the input does not excite (its
         ``source`` and ``detail`` say which); None when the data give none.
     fits_ : list of EffectFit
-        The fitted candidates, in the order of ``effects``.
+        The fitted candidates, in the order of ``effects``; when a channel
+        delay is found and the nominal's refit with it moves a parameter,
+        that refit is ``recalibration`` and ``input_delay`` is left out.
     black_box_ : DecoupledPNLSSRegressor or None
     black_box_branches_ : list of dict
         Reading of each black-box branch on the training signals (see
