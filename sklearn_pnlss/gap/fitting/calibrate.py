@@ -232,14 +232,14 @@ def jumped_signals(mse, ratio=JUMP_RATIO):
     mse = np.asarray(mse, float)
     if mse.size < 3:
         return []
-    return [int(i) for i in np.flatnonzero((mse >= ratio * np.median(mse)) & (mse > 0))]
+    return [int(i) for i in np.flatnonzero(mse >= ratio * np.median(mse))]
 
 
 def _refit_without_jumps(obj, theta, r, lower, upper, max_nfev, ftol):
     """``theta`` (residuals ``r``) refitted on the training signals that did
-    not jump, kept when it lowers the cost on all of them or the median
-    signal's by ``JUMP_RATIO``: ``(theta, its residuals, (converged,
-    message) of the refit or None, simulations used)``.
+    not jump, kept when it lowers the cost on all of them: ``(theta, its
+    residuals, (converged, message) of the refit or None, simulations
+    used)``.
 
     A response that jumps between coexisting steady states (a stiff spring
     engaging beyond a clearance) makes the simulation error a needle: 0.1 %
@@ -248,13 +248,7 @@ def _refit_without_jumps(obj, theta, r, lower, upper, max_nfev, ftol):
     misfit changes by jumps that stall the trust region there.  The other
     signals' error is smooth down to the needle; fitted on them alone the
     parameters reach it, and the jumped signal then settles where the data
-    did (measured: -67 -> -103 dB on that signal, the noise floor).  It may
-    not: with a sensor's delay and an anti-alias filter in the data, the
-    refit took three signals of a stiff backlash from -83, -74 and -89 dB
-    to the noise (-103 dB) while the fourth stayed on its other branch
-    (-56 dB), a hair above the cost it started from.  The majority then
-    holds the parameters, the outlier the branch the simulator cannot
-    know.
+    did (measured: -67 -> -103 dB on that signal, the noise floor).
     """
     jumped = jumped_signals(per_signal_mse(r, obj.y_meas))
     if not jumped:
@@ -263,9 +257,7 @@ def _refit_without_jumps(obj, theta, r, lower, upper, max_nfev, ftol):
     refit, converged, message, _ = _solve(sub, theta, lower, upper, max_nfev, ftol)
     r_refit = obj(refit)
     n_used = sub.n_evaluations + 1  # and the refit's cost on all signals
-    median_gain = np.median(per_signal_mse(r, obj.y_meas)) / max(np.median(per_signal_mse(r_refit, obj.y_meas)),
-                                                                 1e-300)
-    if np.sum(r_refit**2) < np.sum(r**2) or median_gain >= JUMP_RATIO:
+    if np.sum(r_refit**2) < np.sum(r**2):
         return refit, r_refit, (converged, message), n_used
     return theta, r, None, n_used
 
