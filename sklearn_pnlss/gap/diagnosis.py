@@ -445,9 +445,7 @@ class GapDiagnosis(BaseEstimator):
         the nominal's error and is reported as ``input_delay``.
         """
         refit = done["input_delay"]
-        moved = [name for name in self._free_nominal()
-                 if abs(refit.physical[name] / getattr(self.nominal, name) - 1) >= RECALIBRATION_SHOWN]
-        if not moved:
+        if all(abs(v) < RECALIBRATION_SHOWN for v in self._nominal_moves(refit).values()):
             return effects
         recal = next(e for e in effects if e.is_recalibration)
         relabelled = replace(refit.effect, name=recal.name, is_recalibration=True,
@@ -643,6 +641,11 @@ class GapDiagnosis(BaseEstimator):
         change = [np.mean([np.mean((m[i] - y_effects[best][i]) ** 2) for m in moved]) for i in range(len(val.u))]
         return [i for i, c in enumerate(change) if c > noise.variance]
 
+    def _nominal_moves(self, fit):
+        """Relative change of each freed nominal parameter in ``fit``."""
+        return {name: float(fit.physical[name] / getattr(self.nominal, name) - 1)
+                for name in self._free_nominal() if name in fit.physical and getattr(self.nominal, name)}
+
     def _recalibrated(self, decision):
         """Relative change of each freed nominal parameter in the chosen
         candidate's fit (``recalibration`` included: the verdict says which
@@ -651,8 +654,7 @@ class GapDiagnosis(BaseEstimator):
         chosen = next((f for f in self.fits_ if f.effect.name == decision.best_effect), None)
         if chosen is None:
             return {}
-        moved = {name: float(chosen.physical[name] / getattr(self.nominal, name) - 1)
-                 for name in self._free_nominal() if name in chosen.physical and getattr(self.nominal, name)}
+        moved = self._nominal_moves(chosen)
         if "delay_s" in chosen.physical and chosen.effect.name != "input_delay":
             moved["delay_s"] = float(chosen.physical["delay_s"])  # the measurement chain's, not relative
         return moved

@@ -300,10 +300,10 @@ def meaningful_ftol(noise, n_samples):
     return max(1e-8, 4.0 / max(noise.dof_per_sample * n_samples, 1.0))
 
 
-def _defect_corrected(effect, nominal, scales, signals, fine_signals, y_meas, offsets, theta, lower, upper,
-                      max_nfev, ftol):
-    """Refine a coarse-rate fit by defect correction: ``(objective,
-    theta, simulations, (converged, message) or None)``.
+def _defect_corrected(obj, fine_signals, theta, lower, upper, max_nfev, ftol):
+    """Refine a fit of the coarse-rate objective ``obj`` by defect
+    correction: ``(objective, theta, simulations, (converged, message) or
+    None)``.
 
     Each round carries the model's own discretisation error at the latest
     estimate (fine minus coarse) into the coarse simulations and refits:
@@ -314,17 +314,16 @@ def _defect_corrected(effect, nominal, scales, signals, fine_signals, y_meas, of
     the noise); a second round lands on the fine-rate optimum.  Rounds stop
     when one lowers the cost by less than ``ftol`` (its start is then the
     fine optimum to the noise) or after ``DEFECT_ROUNDS``.  The objective
-    returned is the last round's (the coarse one if none could run).
+    returned is the last round's (``obj`` if none could run).
     """
-    obj = _Objective(effect, nominal, scales, signals, y_meas, offsets)
-    plain, n_used, solved = signals.without_correction(), 0, None
+    plain, n_used, solved = obj.signals.without_correction(), 0, None
     for _ in range(DEFECT_ROUNDS):
-        osc, transform, _ = effect_model(effect, theta, nominal, scales)
+        osc, transform, _ = effect_model(obj.effect, theta, obj.nominal, obj.scales)
         try:
             fine = simulate_signals(osc, fine_signals, transform)
-            corrected = signals.with_correction(
+            corrected = obj.signals.with_correction(
                 [f - c for f, c in zip(fine, simulate_signals(osc, plain, transform))])
-            round_obj = _Objective(effect, nominal, scales, corrected, y_meas, offsets)
+            round_obj = _Objective(obj.effect, obj.nominal, obj.scales, corrected, obj.y_meas, obj.offsets)
             start_cost = float(np.sum(round_obj(theta) ** 2))
             new, converged, message, cost = _solve(round_obj, theta, lower, upper, max(3, max_nfev // 4), ftol)
         except (ValueError, FloatingPointError):
@@ -383,8 +382,7 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
             theta = starts[int(np.argmin(costs))]
     n_evaluations = obj.n_evaluations
     if effect.n_params and fine_signals is not None and signals.correction is not None:
-        obj, theta, n_used, solved = _defect_corrected(effect, nominal, scales, signals, fine_signals, y_meas,
-                                                       offsets, theta, lower, upper, max_nfev, ftol)
+        obj, theta, n_used, solved = _defect_corrected(obj, fine_signals, theta, lower, upper, max_nfev, ftol)
         n_evaluations += n_used
         converged, message = solved or (converged, message)
         coarse_cost = np.sum(obj(theta) ** 2)
