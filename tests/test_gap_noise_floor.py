@@ -176,6 +176,33 @@ def test_non_excited_lines_follow_a_roll_off(one_period_records):
     assert abs(_db(floor.variance) - _db(np.mean(np.concatenate(noise) ** 2))) < 1.0
 
 
+def test_non_excited_lines_of_records_that_are_not_periodic():
+    """Band-limited noise records (5-150 Hz, 4,000 samples, from rest): read
+    through a rectangular window the input's leak covers every line, and the
+    diagnosis had no floor at all (issue 16, family c: the true cubic spring
+    closed "only 81 %" against a floor guessed 60 dB below the gap).  Read
+    through a Hann window, the exact model's residual above the band gives
+    the white noise's level within 0.5 dB."""
+    from scipy.signal import butter, sosfiltfilt
+
+    rng = np.random.RandomState(4)
+    sos = butter(6, [5.0, 150.0], btype="band", fs=FS, output="sos")
+    u = []
+    for _ in range(2):
+        e = sosfiltfilt(sos, rng.standard_normal(4000))
+        u.append(50.0 * e / np.std(e))
+    records = SignalSet.from_signals(u, N, FS, 10)  # 4,000 samples: not periodic, from rest
+    clean = simulate_signals(NOMINAL, records)
+    noise = [_white(4000, 1e-6, rng) for _ in u]
+    y = [c + e for c, e in zip(clean, noise)]
+    floor = non_excited_noise(u, y, {"nominal": clean}, N, FS)
+    assert floor is not None and floor.source == "non_excited_lines"
+    assert abs(_db(floor.variance) - _db(np.mean(np.concatenate(noise) ** 2))) < 0.5
+    # without the window (the records taken as periodic) hardly a line is free
+    lines = [np.abs(np.fft.rfft(x)) ** 2 for x in u]
+    assert max(np.sum(p < 1e-6 * p[1:].max()) for p in lines) < 20
+
+
 def test_no_free_lines_no_estimate(one_period_records):
     X, _ = multisine(N, fs=FS, f_band=(FS / N, FS / 2), rms=50.0, n_periods=1, n_realizations=1, random_state=0)
     u = [X[0, :, 0]]
