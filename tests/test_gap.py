@@ -9,8 +9,17 @@ from sklearn_pnlss.gap import GapDiagnosis, default_effects
 from sklearn_pnlss.gap.candidates.clues import DataClues, read_clues
 from sklearn_pnlss.gap.candidates.effects import Scales, make_effect
 from sklearn_pnlss.gap.candidates.stiffness_start import measured_stiffness_change, recalibration_start
-from sklearn_pnlss.gap.verdict.noise_floor import drift_free_variance
-from sklearn_pnlss.gap.fitting.simulate import SignalSet, detect_period, prime_factors, simulate_signals
+from sklearn_pnlss.gap.verdict.noise_floor import drift_free_variance, estimate_noise
+from sklearn_pnlss.gap.fitting.simulate import (
+    SignalSet,
+    detect_period,
+    measured_starts,
+    prime_factors,
+    simulate_signals,
+)
+from sklearn_pnlss.gap.where import content_limit, signal_derivative
+from sklearn_pnlss.physics.oscillator import STATE_Z
+from sklearn_pnlss.physics.resampling import decimate_fir, upsample_fft
 from sklearn_pnlss.physics import (
     CoupledMass,
     CubicStiffness,
@@ -158,6 +167,55 @@ def test_drift_periods_continue_from_the_initial_steady_state():
     assert np.max(np.abs(drifting[0, :20] - still[0, :20])) < 1e-3 * np.abs(still).max()
     change = [np.sqrt(np.mean((drifting[p] - still[p]) ** 2)) for p in range(3)]
     assert change[0] < change[1] < change[2]
+
+
+def test_steady_state_search_starts_where_the_measurement_does():
+    """A stiffening spring driven above its resonance has two stable steady
+    states; the one a record shows is found again from its period start,
+    where a search from rest finds the other."""
+    n, fs, r = 2000, 15000.0, 20
+    u = 40.0 * np.sin(2 * np.pi * 4 * np.arange(n) / n)  # 30 Hz; the resonance at 25 Hz
+    osc = NOMINAL.with_forces([CubicStiffness(1e8)])
+    lower = simulate_signals(osc, SignalSet.from_signals([u], n, fs, r))[0]
+    # the upper branch: 150 periods from a start 20 mm into the swing
+    u_fine = upsample_fft(u, r, periodic=True)
+    kick = np.zeros(STATE_Z)
+    kick[1] = 2e-2 * 2 * np.pi * 4 * fs / n
+    swing = osc.simulate_fine(np.tile(u_fine, 150), fs=r * fs, periodic=False, initial_state=kick).y
+    upper = decimate_fir(swing[-u_fine.size:], prime_factors(r), periodic=True)
+    assert np.abs(upper).max() > 8 * np.abs(lower).max()
+    # measured on the upper branch: two periods, noise 1e-3 of the peak
+    y = np.tile(upper, 2) + 1e-3 * np.abs(upper).max() * np.random.RandomState(0).standard_normal(2 * n)
+    starts = measured_starts([y], [signal_derivative(y, fs, 2, n, f_max=content_limit([u], fs))], [2], n)
+    found = simulate_signals(osc, SignalSet.from_signals([np.tile(u, 2)], n, fs, r, starts=starts))[0]
+    np.testing.assert_allclose(found, np.tile(upper, 2), atol=1e-6 * np.abs(upper).max())
+    # a linear structure has one steady state, wherever the search starts
+    linear = [simulate_signals(NOMINAL, SignalSet.from_signals([u], n, fs, r, starts=s))[0]
+              for s in (None, starts[:1])]
+    np.testing.assert_allclose(linear[1], linear[0], atol=1e-8 * np.abs(linear[0]).max())
+
+
+def test_a_training_signal_that_never_settled_is_left_out():
+    """A record started before the start-up transient died is no steady
+    state: its periods differ far more than the others', it is left out of
+    the fits and the noise floor, with a warning and a line in the report."""
+    real = NOMINAL.with_forces([CubicStiffness(1e8)])
+    X, _ = multisine(N, fs=FS, f_band=(5.0, 150.0), rms=50.0, n_periods=3, n_realizations=3, random_state=3)
+    u = [x[:, 0] for x in X]
+    rng = np.random.RandomState(0)
+    y = simulate_signals(real, SignalSet.from_signals(u, N, FS, 10), noise_rms=2e-6, random_state=rng)
+    y[1] = simulate_signals(real, SignalSet(u[1:2], [0], None, FS, 10, (2, 5)), noise_rms=2e-6,
+                            random_state=rng)[0]  # from rest
+    diag = GapDiagnosis(NOMINAL, effects=["cubic_stiffness", "recalibration"], **FAST)
+    with pytest.warns(UserWarning, match="Training signal 1 never settles"):
+        diag.fit(u, y)
+    assert diag.unsettled_signals_ == [1]
+    settled_floor = estimate_noise([y[0], y[2]], N)
+    assert diag.noise_.variance == pytest.approx(settled_floor.variance)
+    report = diag.report(*gap_data(real)[2:])
+    assert report.best_effect == "cubic_stiffness"
+    assert "training signal 1 left out" in str(report)
+    assert report.to_dict()["unsettled_signals"] == [1]
 
 
 def test_second_mode_start_read_from_the_frf():

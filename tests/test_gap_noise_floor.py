@@ -20,6 +20,7 @@ from sklearn_pnlss.gap.verdict.noise_floor import (
     non_excited_noise,
     repeated_input_noise,
     residual_noise,
+    unsettled_signals,
 )
 from sklearn_pnlss.gap.fitting.simulate import SignalSet, simulate_signals
 from sklearn_pnlss.physics import CubicStiffness, Oscillator
@@ -271,3 +272,18 @@ def test_as_much_as_a_good_black_box_is_explained_when_the_floor_is_estimated():
     assert _decide(0.67, 0.55, "non_excited_lines").best_effect == "unexplained"
     # a candidate far below the black box stays unexplained
     assert _decide(0.5, 0.95, "non_excited_lines").best_effect == "unexplained"
+
+
+def test_unsettled_signals_are_those_whose_periods_differ_far_more():
+    rng = np.random.RandomState(0)
+    base = np.sin(2 * np.pi * 3 * np.arange(N) / N)
+    drift = np.linspace(0, 0.01, 4)[:, None] * base  # common to every signal: not unsettled
+    signals = [(np.tile(base, (4, 1)) * (k + 1) + drift + 1e-4 * rng.standard_normal((4, N))).ravel()
+               for k in range(4)]
+    assert unsettled_signals(signals, N) == []
+    # realisation 2's periods differ as a chaotic response's do
+    signals[2] = signals[2] + 1e-2 * rng.standard_normal(4 * N)
+    assert unsettled_signals(signals, N) == [2]
+    # one signal of several periods has nothing to compare with
+    assert unsettled_signals(signals[2:3] + [base], N) == []
+    assert unsettled_signals(signals, None) == []

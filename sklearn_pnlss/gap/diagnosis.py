@@ -22,9 +22,10 @@ from .candidates.clues import read_clues
 from .verdict.decision import decide
 from .candidates.effects import (NOMINAL_PARAMETERS, Scales, default_effects, delay_signal, make_effect,
                                  recalibration_effect)
-from .verdict.noise_floor import estimate_noise, non_excited_noise, repeated_input_noise, residual_noise
+from .verdict.noise_floor import (UNSETTLED_RATIO, estimate_noise, non_excited_noise, repeated_input_noise,
+                                  residual_noise, unsettled_signals)
 from .report import RECALIBRATION_SHOWN, GapReport
-from .fitting.simulate import SignalSet, detect_period, misfit, simulate_signals
+from .fitting.simulate import SignalSet, detect_period, measured_starts, misfit, simulate_signals
 from .where import locate_gap, signal_derivative
 
 __all__ = ["GapDiagnosis"]
@@ -235,8 +236,14 @@ class GapDiagnosis(BaseEstimator):
         self.verbose = verbose
 
     # ------------------------------------------------------------------
-    def _signal_set(self, u_list, oversampling=None):
-        return SignalSet.from_signals(u_list, self.period, self.fs, oversampling or self.oversampling)
+    def _signal_set(self, u_list, y_list):
+        """The measured signals as simulated: each periodic one's steady
+        state searched from the state its measurement starts in."""
+        signals = SignalSet.from_signals(u_list, self.period, self.fs, self.oversampling)
+        y_list = self._outputs(y_list)
+        velocity = [signal_derivative(y, self.fs, P, self.period) for y, P in zip(y_list, signals.n_periods)]
+        signals.starts = measured_starts(y_list, velocity, signals.n_periods, self.period)
+        return signals, velocity
 
     def _candidates(self):
         names = default_effects() if self.effects is None else list(self.effects)
@@ -288,14 +295,13 @@ class GapDiagnosis(BaseEstimator):
         u_list, y_list = _siso(X, "X"), _siso(y, "y")
         _check_pairs(u_list, y_list, "X", "y")
         u_list = self._inputs(u_list)
+        u_list, y_list = self._settled(u_list, y_list)
         effects = self._candidates()
         repeats = self.period_ is None and self._warn_if_periodic(u_list)
-        train = self._signal_set(u_list)
+        train, velocity_list = self._signal_set(u_list, y_list)
 
         y_all = np.concatenate(y_list)
         u_all = np.concatenate(u_list)
-        velocity_list = [signal_derivative(yy, self.fs, P, self.period)
-                         for yy, P in zip(y_list, train.n_periods)]
         velocity = np.concatenate(velocity_list)
         if np.std(u_all) == 0 or np.std(y_all) == 0:
             raise ValueError("X and y must not be constant: a diagnosis needs an excited response.")
@@ -321,7 +327,7 @@ class GapDiagnosis(BaseEstimator):
 
         # The force-law starts and the black box (which has no constant
         # term) read the measured motion, which a sensor's offset would shift.
-        y_centred = [y - y.mean() for y in y_list] if self.offsets else y_list
+        y_centred = self._outputs(y_list)
         clues = read_clues(self.nominal, u_list, y_centred, y_nominal, train.n_periods, self.period_, self.fs)
         coarse = train.coarse(self.fit_oversampling, self.nominal)
         self._log(f"fitting {len(effects)} candidates{' and the black box' if self.black_box else ''} "
@@ -408,9 +414,29 @@ class GapDiagnosis(BaseEstimator):
         self.fit_time_ = time.perf_counter() - start
         return self
 
+    def _settled(self, u_list, y_list):
+        """The training signals in steady state; the others
+        (``unsettled_signals_``) are left out, with a warning."""
+        self.unsettled_signals_ = unsettled_signals(y_list, self.period_)
+        if not self.unsettled_signals_:
+            return u_list, y_list
+        which = ", ".join(map(str, self.unsettled_signals_))
+        warnings.warn(
+            f"Training signal {which} never settles: its periods differ {UNSETTLED_RATIO:g} times (power) or more "
+            f"than the other signals' periods do (a chaotic response, a record started before the transient "
+            f"died, or a structure that changed during it). No periodic simulation can follow it, and its "
+            f"spread is not the sensor's noise: it is left out of the fits and the noise floor.",
+            UserWarning, stacklevel=4)  # fit is wrapped by the parameter check
+        keep = [i for i in range(len(u_list)) if i not in self.unsettled_signals_]
+        return [u_list[i] for i in keep], [y_list[i] for i in keep]
+
     def _inputs(self, u_list):
         """The input signals, less their means with ``offsets``."""
         return [u - u.mean() for u in u_list] if self.offsets else u_list
+
+    def _outputs(self, y_list):
+        """The measured displacements, less their means with ``offsets``."""
+        return [y - y.mean() for y in y_list] if self.offsets else y_list
 
     def _measurement_candidates(self, effects):
         """``recalibration`` and ``input_delay`` when both are candidates
@@ -676,7 +702,7 @@ class GapDiagnosis(BaseEstimator):
         u_list, y_list = _siso(X_val, "X_val"), _siso(y_val, "y_val")
         _check_pairs(u_list, y_list, "X_val", "y_val")
         u_list = self._inputs(u_list)
-        val = self._signal_set(u_list)
+        val, _ = self._signal_set(u_list, y_list)
         y_nominal = simulate_signals(self.nominal, val)
         if self.period_ is None:
             self._warn_if_steady_state(u_list, y_list, y_nominal, "validation", stacklevel=3)
@@ -709,4 +735,5 @@ class GapDiagnosis(BaseEstimator):
                            period=self.period_, noise=noise, significance=self.significance,
                            u_train=u_train, y_train=y_train, y_train_nominal=self._train_nominal)
         return GapReport(decision=decision, where=where, scales=self.scales_, noise=noise,
-                         black_box=self.black_box_, fits=self.fits_, opinions=self.black_box_branches_)
+                         black_box=self.black_box_, fits=self.fits_, opinions=self.black_box_branches_,
+                         unsettled=self.unsettled_signals_)

@@ -75,9 +75,13 @@ class GapReport:
         :func:`sklearn_pnlss.gap.where.locate_gap`).
     reason : str
         One sentence behind the verdict.
+    unsettled_signals : list of int
+        Training signals left out because they never settled (their
+        periods differ far more than the others'), see
+        :func:`~sklearn_pnlss.gap.verdict.noise_floor.unsettled_signals`.
     """
 
-    def __init__(self, *, decision, where, scales, noise, black_box, fits, opinions=None):
+    def __init__(self, *, decision, where, scales, noise, black_box, fits, opinions=None, unsettled=()):
         self.decision = decision
         self.where = where
         self.scales = scales
@@ -93,6 +97,7 @@ class GapReport:
         self.noise_source = decision.noise_source
         self.noise_detail = decision.noise_detail
         self.reason = decision.reason
+        self.unsettled_signals = list(unsettled)
         self.black_box = None
         if black_box is not None:
             self.black_box = dict(gap_after_db=decision.black_box_gap_db,
@@ -107,7 +112,8 @@ class GapReport:
             p_value=self.p_value, reason=self.reason, gap_db=self.gap_db,
             per_signal_gap_db=self.decision.per_signal_before_db, noise_floor_db=self.noise_floor_db,
             noise_source=self.noise_source, noise_detail=self.noise_detail,
-            sensitive_signals=self.decision.sensitive_signals, recalibrated=self.decision.recalibrated,
+            sensitive_signals=self.decision.sensitive_signals, unsettled_signals=self.unsettled_signals,
+            recalibrated=self.decision.recalibrated,
             ranking=[r.to_dict() for r in self.ranking], black_box=self.black_box, where=self.where,
         ))
 
@@ -129,6 +135,10 @@ class GapReport:
                          f"what the training data determine (their standard errors), move its simulation "
                          f"above the noise (a chaotic response or a jump); no simulator can follow it sample "
                          f"by sample")
+        if self.unsettled_signals:
+            which = ", ".join(str(i) for i in self.unsettled_signals)
+            lines.append(f"  training signal {which} left out: its periods differ far more than the other "
+                         f"signals' (it never settled: a chaotic response, or a record started too early)")
         if self.black_box is not None:
             head = f"black box (decoupled PNLSS, {self.black_box['n_params']} parameters): "
             if np.isfinite(self.black_box["gap_after_db"]):

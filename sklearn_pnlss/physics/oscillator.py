@@ -260,10 +260,10 @@ class Oscillator:
             Integration rate, Hz (step ``h = 1 / fs``).
         periodic : bool
             If True, ``u_fine`` is one period of a periodic input: periods are
-            simulated from rest until the state at the end of a period differs
+            simulated from rest (or ``initial_state``) until the state at the end of a period differs
             from its start by less than ``tol`` (relative to the state's peak
             over the period); the last period is returned.  If False, the
-            simulation starts from rest at ``t = 0``.
+            simulation starts from rest (or ``initial_state``) at ``t = 0``.
         tol : float, default=1e-12
             Steady-state tolerance (periodic only).
         max_periods : int, default=200
@@ -277,7 +277,10 @@ class Oscillator:
             next period (it holds the same oscillator's layout of
             displacement, velocity, acceleration and internal states; the
             acceleration and the states' rates are recomputed from the
-            equation of motion); ``periodic`` must then be False.
+            equation of motion).  With ``periodic`` the steady-state search
+            starts there: where several steady states coexist (a stiffening
+            spring near resonance), the one whose basin holds this state is
+            found.
         warn : bool, default=True
             Warn when the steady state is not reached (callers that check
             ``n_periods`` themselves turn it off).
@@ -300,8 +303,6 @@ class Oscillator:
         nz = self.n_internal_states
         state = np.zeros(STATE_Z + 2 * nz)
         if initial_state is not None:
-            if periodic:
-                raise ValueError("initial_state needs periodic=False.")
             initial_state = np.asarray(initial_state, dtype=np.float64)
             if initial_state.shape != state.shape or not np.all(np.isfinite(initial_state)):
                 raise ValueError(
@@ -312,9 +313,6 @@ class Oscillator:
             # (y, yd, z) and u_fine[0]: recompute them, so a caller only has
             # to supply the positions (e.g. a clock state set to zero).
             state = initial_state.copy()
-            y, yd, z, n_failed = self._run(u_fine, n - 1, h, state, True, n)
-            _check_bound(y, max_abs)
-            return FineSimulation(np.arange(n) * h, u_fine, y, yd, z, fs, 1, n_failed, state)
         if not periodic:
             y, yd, z, n_failed = self._run(u_fine, n - 1, h, state, True, n)
             _check_bound(y, max_abs)

@@ -5,6 +5,14 @@ starts from rest.  A periodic signal is simulated over one period until
 steady state and repeated, unless the oscillator is time-varying (stiffness
 drift): then the steady state of the oscillator frozen at ``t = 0`` is the
 start, and the ``P`` periods are integrated one after the other.
+
+The steady-state search of a measured periodic signal starts from the state
+the measurement shows at its period start (:attr:`SignalSet.starts`), not
+from rest.  Where several steady states coexist (a stiffening spring driven
+near resonance), the one the experiment settled on is an unknown of the
+experiment, not of the model: started from rest, a model that differs from
+the structure only by a delay or a filter can settle on the other one, and
+no parameter change brings it back.
 """
 from dataclasses import dataclass
 
@@ -15,7 +23,7 @@ from ...physics.oscillator import STATE_Z, band_limited_noise
 from ...physics.resampling import decimate_fir, upsample_fft
 from ...utils.validation import is_periodic
 
-__all__ = ["SignalSet", "simulate_signals", "prime_factors", "detect_period", "misfit"]
+__all__ = ["SignalSet", "simulate_signals", "measured_starts", "prime_factors", "detect_period", "misfit"]
 
 
 def misfit(y_sim, y_meas, offsets=False):
@@ -101,6 +109,10 @@ class SignalSet:
     fs : float
     oversampling : int
     decimation : tuple of int
+    starts : list of (float, float) or None, default=None
+        Displacement and velocity at the start of each periodic signal
+        (None for a signal, or for all: from rest), where its steady-state
+        search begins; see :func:`measured_starts`.
     """
 
     u: list
@@ -109,6 +121,7 @@ class SignalSet:
     fs: float
     oversampling: int
     decimation: tuple
+    starts: list = None
 
     def __post_init__(self):
         self.correction = None
@@ -120,10 +133,10 @@ class SignalSet:
                 self.u_fine.append(upsample_fft(u, self.oversampling, periodic=False))
 
     @classmethod
-    def from_signals(cls, u_list, period, fs, oversampling, decimation=None):
+    def from_signals(cls, u_list, period, fs, oversampling, decimation=None, starts=None):
         n_periods = [u.size // period if is_periodic(u.size, period) else 0 for u in u_list]
         decimation = prime_factors(oversampling) if decimation is None else tuple(decimation)
-        return cls(list(u_list), n_periods, period, float(fs), int(oversampling), decimation)
+        return cls(list(u_list), n_periods, period, float(fs), int(oversampling), decimation, starts)
 
     def coarse(self, oversampling, nominal):
         """The same signals integrated at a lower rate, corrected by the
@@ -139,7 +152,7 @@ class SignalSet:
         if oversampling >= self.oversampling:
             return self
         out = SignalSet(self.u, self.n_periods, self.period, self.fs, int(oversampling),
-                        prime_factors(oversampling))
+                        prime_factors(oversampling), self.starts)
         fine = simulate_signals(nominal, self)
         out.correction = [f - c for f, c in zip(fine, simulate_signals(nominal, out))]
         return out
@@ -161,6 +174,7 @@ class SignalSet:
         out.n_periods = [self.n_periods[i] for i in index]
         out.u_fine = [self.u_fine[i] for i in index]
         out.correction = None if self.correction is None else [self.correction[i] for i in index]
+        out.starts = None if self.starts is None else [self.starts[i] for i in index]
         out.period, out.fs = self.period, self.fs
         out.oversampling, out.decimation = self.oversampling, self.decimation
         return out
@@ -199,27 +213,67 @@ MAX_PERIODS = 30
 FIT_MAX_PERIODS = 15
 
 
-def _steady(osc, u_fine, fs_fine, max_periods=MAX_PERIODS, max_abs=None):
+def _repeats(y, n_periods):
+    """Whether a record's last period repeats its first: settled, so that
+    its decimation is circular (a drifting or unsettled record's is not)."""
+    periods = y.reshape(n_periods, -1)
+    return np.max(np.abs(periods[-1] - periods[0])) <= 1e-6 * np.max(np.abs(y))
+
+
+def measured_starts(y_list, velocity_list, n_periods, period):
+    """Displacement and velocity each periodic record shows at its period
+    start, averaged over its periods (None for a record from rest).
+
+    Parameters
+    ----------
+    y_list, velocity_list : list of ndarray (n_samples_i,)
+        Measured displacement (less a sensor's offset) and its derivative.
+    n_periods : list of int
+    period : int or None
+
+    Returns
+    -------
+    starts : list of (float, float) or None
+    """
+    return [(float(np.mean(y[::period][:P])), float(np.mean(v[::period][:P]))) if P else None
+            for y, v, P in zip(y_list, velocity_list, n_periods)]
+
+
+def _steady(osc, u_fine, fs_fine, max_periods=MAX_PERIODS, max_abs=None, start=None):
+    initial = None
+    if start is not None:
+        initial = np.zeros(STATE_Z + 2 * osc.n_internal_states)
+        initial[:2] = start  # internal states at zero; rates follow from the equation of motion
     return osc.simulate_fine(u_fine, fs=fs_fine, periodic=True, tol=STEADY_TOL, max_periods=max_periods,
-                             warn=False, max_abs=max_abs)
+                             warn=False, max_abs=max_abs, initial_state=initial)
 
 
-def _fine_response(osc, u_fine, P, fs_fine, transform, max_periods=MAX_PERIODS, max_abs=None):
-    """Displacement at the integration rate over the whole signal."""
+def _fine_response(osc, u_fine, P, fs_fine, transform, max_periods=MAX_PERIODS, max_abs=None, start=None,
+                   record=False):
+    """Displacement at the integration rate over the whole signal, and
+    whether it is periodic (its decimation circular)."""
     periodic = P > 0
     if transform is not None:
         u_fine = transform(u_fine, fs_fine, periodic)
     if not periodic:
-        return osc.simulate_fine(u_fine, fs=fs_fine, periodic=False, max_abs=max_abs).y
+        return osc.simulate_fine(u_fine, fs=fs_fine, periodic=False, max_abs=max_abs).y, False
     if not osc.time_varying:
-        return np.tile(_steady(osc, u_fine, fs_fine, max_periods, max_abs).y, P)
-    start = _steady(_frozen(osc), u_fine, fs_fine, max_periods, max_abs).final_state
+        steady = _steady(osc, u_fine, fs_fine, max_periods, max_abs, start)
+        if record:
+            # where the search ended, on: a response that never settles
+            # (chaos) differs from period to period, as measured; one
+            # period more says whether the record is periodic
+            y = osc.simulate_fine(np.tile(u_fine, P + 1), fs=fs_fine, periodic=False,
+                                  initial_state=steady.final_state, max_abs=max_abs).y
+            return y[:-u_fine.size], _repeats(y, P + 1)
+        return np.tile(steady.y, P), True
+    start = _steady(_frozen(osc), u_fine, fs_fine, max_periods, max_abs, start).final_state
     return osc.simulate_fine(np.tile(u_fine, P), fs=fs_fine, periodic=False,
-                             initial_state=_continuation_state(osc, start), max_abs=max_abs).y
+                             initial_state=_continuation_state(osc, start), max_abs=max_abs).y, False
 
 
 def simulate_signals(osc, signals, transform=None, *, noise_rms=0.0, random_state=None,
-                     max_periods=MAX_PERIODS, max_abs=None):
+                     max_periods=MAX_PERIODS, max_abs=None, record=False):
     """Simulate ``osc`` on every signal of a :class:`SignalSet`.
 
     Parameters
@@ -241,6 +295,14 @@ def simulate_signals(osc, signals, transform=None, *, noise_rms=0.0, random_stat
         Displacement bound at the integration rate: a simulation that
         exceeds it stops there with ``FloatingPointError`` (a fit's trial
         point running away costs one period, not ``max_periods``).
+    record : bool, default=False
+        Simulate each periodic signal as a laboratory records it (data
+        making): its ``P`` periods integrated one after the other from
+        where the steady-state search ended.  A settled response gives the
+        steady state repeated, as without ``record``; one that does not
+        settle (a chaotic response) gives periods that differ, where
+        repeating the search's last period would give data that no
+        structure produces.
 
     Returns
     -------
@@ -251,14 +313,13 @@ def simulate_signals(osc, signals, transform=None, *, noise_rms=0.0, random_stat
     rng = check_random_state(random_state)
     fs_fine = signals.fs * signals.oversampling
     out = []
-    for u_fine, P in zip(signals.u_fine, signals.n_periods):
-        y_fine = _fine_response(osc, u_fine, P, fs_fine, transform, max_periods, max_abs)
+    starts = signals.starts or [None] * len(signals.u_fine)
+    for u_fine, P, start in zip(signals.u_fine, signals.n_periods, starts):
+        y_fine, circular = _fine_response(osc, u_fine, P, fs_fine, transform, max_periods, max_abs, start,
+                                          record)
         if noise_rms > 0:
             y_fine = y_fine + band_limited_noise(y_fine.size, fs=fs_fine, f_max=signals.fs / 2,
                                                  rms=noise_rms, random_state=rng)
-        # A time-invariant periodic record is periodic at the fine rate, so
-        # its decimation is circular; a drifting one is not.
-        circular = P > 0 and not osc.time_varying
         if signals.oversampling > 1:
             y_fine = decimate_fir(y_fine, signals.decimation, periodic=circular)
         out.append(y_fine)

@@ -37,7 +37,7 @@ from scipy import stats
 from ...frequency.noise import periodic_noise_variance
 from ...utils.validation import is_periodic
 
-__all__ = ["NoiseFloor", "drift_free_variance", "estimate_noise", "repeated_input_noise",
+__all__ = ["NoiseFloor", "drift_free_variance", "estimate_noise", "unsettled_signals", "repeated_input_noise",
            "non_excited_noise", "residual_noise", "gap_test"]
 
 #: Frequency bands over which a noise level read at scattered DFT lines is
@@ -52,6 +52,11 @@ NON_EXCITED_DB = -60.0
 #: (relative power, dB): a shaker driven twice by one signal measures two
 #: nearly equal forces.
 SAME_INPUT_DB = -60.0
+#: A signal whose periods differ by this much more (power ratio) than the
+#: other signals' periods do has not settled.  Realisations measured by one
+#: sensor differ in that spread by chance alone by about 1 dB (four
+#: periods, thousands of lines); a chaotic response differs by tens of dB.
+UNSETTLED_RATIO = 10.0
 
 
 @dataclass
@@ -128,6 +133,32 @@ def _from_spectrum(spectrum, n_grid, **kwargs):
     # freedom of (sum s)^2 / sum s^2, each complex bin carrying two.
     dof = total**2 / np.sum(weights * spectrum**2) if total > 0 else n_grid
     return NoiseFloor(float(total / n_grid), spectrum, float(min(dof / n_grid, 1.0)), **kwargs)
+
+
+def unsettled_signals(y_list, period):
+    """Signals of several periods whose periods differ far more than the
+    other signals' do: not in steady state.
+
+    The spread over the periods (a slow trend removed, as in
+    :func:`drift_free_variance`) of each signal is compared with the median
+    of the others' spreads; above ``UNSETTLED_RATIO`` times that, the signal
+    never settled: a response that is chaotic on that realisation (a stiff
+    backlash driven hard), a record started before the transient died, or
+    a structure that changed during that record.  No periodic simulation
+    can follow such a signal, and its spread is not the sensor's noise.
+    Needs two signals of two periods or more; returns their indices.
+    """
+    if period is None:
+        return []
+    spread = {}
+    for i, y in enumerate(y_list):
+        s = drift_free_variance([y], period)
+        if s is not None:
+            spread[i] = float(np.sum(s))
+    if len(spread) < 2:
+        return []
+    return [i for i, s in spread.items()
+            if s > UNSETTLED_RATIO * np.median([t for j, t in spread.items() if j != i])]
 
 
 def estimate_noise(y_list, period):
