@@ -71,6 +71,12 @@ HIDDEN_DELAY_DB = 6.0
 #: which ``period=None`` is warned about (see ``_warn_if_steady_state``):
 #: three standard deviations of a chance projection on a short record.
 STEADY_STATE_SHARE = 0.3
+#: Further budgets of ``max_nfev`` iterations the leading candidate gets
+#: when its fit stops on the budget while still improving (see
+#: :meth:`GapDiagnosis._polish_leader`).
+LEADER_BUDGETS = 2
+#: Training improvement (dB) a further budget must bring for the next one.
+LEADER_PROGRESS_DB = 0.5
 
 
 def _expected_cost(name, effects):
@@ -334,9 +340,12 @@ class GapDiagnosis(BaseEstimator):
                   f"on {len(u_list)} signals")
         ftol = meaningful_ftol(self.noise_, y_all.size)
 
-        def fit_task(effect, clues=clues, max_nfev=self.max_nfev):
-            return delayed(fit_effect)(effect, self.nominal, self.scales_, coarse, y_list, max_nfev=max_nfev,
-                                       fine_signals=train, clues=clues, ftol=ftol, offsets=self.offsets)
+        def fit_task(effect, clues=clues, max_nfev=self.max_nfev, full_rate=False):
+            # full_rate: at the reporting rate only (carrying on a fit that
+            # has been refined there already)
+            return delayed(fit_effect)(effect, self.nominal, self.scales_, train if full_rate else coarse, y_list,
+                                       max_nfev=max_nfev, fine_signals=None if full_rate else train, clues=clues,
+                                       ftol=ftol, offsets=self.offsets)
 
         def aligned_clues(delay_s):
             # The clues as the delayed model sees the data: the input (and
@@ -396,6 +405,7 @@ class GapDiagnosis(BaseEstimator):
         done.update(run(tasks))
         if first and self.delay_ is None:
             effects = self._hidden_delay(effects, done, first, fit_task, run, aligned_clues)
+        self._polish_leader(effects, done, fit_task, run)
         self.fits_ = [done[e.name] for e in effects]
         self.black_box_, self.black_box_branches_ = done.get(_BLACK_BOX), []
         if self.black_box_ is not None:
@@ -479,6 +489,39 @@ class GapDiagnosis(BaseEstimator):
         done[recal.name] = replace(refit, effect=relabelled)
         del done["input_delay"]
         return [relabelled if e.is_recalibration else e for e in effects if e.name != "input_delay"]
+
+    def _polish_leader(self, effects, done, fit_task, run):
+        """Carry on the fit of the candidate with the lowest training error
+        while it stops on its iteration budget and still improves
+        (``done`` is updated in place).
+
+        The verdict rests on that candidate, and a needle-narrow minimum
+        (a stiff backlash with a channel delay and the nominal refitted:
+        seven parameters, 0.1 % wide) can take more iterations than the
+        budget every other candidate gets.  Measured on the stiff backlash
+        of family d (seed 101): the budget ran out at -97.0 dB of training
+        error, 0.4 % off in mass and stiffness, with the noise at -103 dB.
+        At most ``LEADER_BUDGETS`` more budgets, each at the reporting rate
+        from where the last stopped, and only while a budget gains
+        ``LEADER_PROGRESS_DB``.
+        """
+        leader = min((e for e in effects if done[e.name].effect.n_params),
+                     key=lambda e: done[e.name].train_mse, default=None)
+        for _ in range(LEADER_BUDGETS if leader is not None else 0):
+            fit = done[leader.name]
+            if fit.converged:
+                return
+            warm = replace(fit.effect, starts=[fit.theta], data_start=None)
+            more = run({leader.name: fit_task(warm, full_rate=True)})[leader.name]
+            gain_db = 10 * np.log10(fit.train_mse / more.train_mse)
+            if gain_db <= 0:
+                return
+            done[leader.name] = replace(more, n_evaluations=fit.n_evaluations + more.n_evaluations,
+                                        seconds=fit.seconds + more.seconds)
+            self._log(f"{leader.name} carried on: training {10 * np.log10(more.train_mse):.2f} dB "
+                      f"({gain_db:.1f} dB better)")
+            if gain_db < LEADER_PROGRESS_DB:
+                return
 
     def _hidden_delay(self, effects, done, first, fit_task, run, aligned_clues):
         """Look for a channel delay behind a dominant nonlinearity; the
