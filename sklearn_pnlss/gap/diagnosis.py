@@ -497,7 +497,7 @@ class GapDiagnosis(BaseEstimator):
 
         The verdict rests on that candidate, and a needle-narrow minimum
         (a stiff backlash with a channel delay and the nominal refitted:
-        seven parameters, 0.1 % wide) can take more iterations than the
+        six parameters, 0.1 % wide) can take more iterations than the
         budget every other candidate gets.  Measured on the stiff backlash
         of family d (seed 101): the budget ran out at -97.0 dB of training
         error, 0.4 % off in mass and stiffness, with the noise at -103 dB.

@@ -9,10 +9,9 @@ start, and the ``P`` periods are integrated one after the other.
 The steady-state search of a measured periodic signal starts from the state
 the measurement shows at its period start (:attr:`SignalSet.starts`), not
 from rest.  Where several steady states coexist (a stiffening spring driven
-near resonance), the one the experiment settled on is an unknown of the
-experiment, not of the model: started from rest, a model that differs from
-the structure only by a delay or a filter can settle on the other one, and
-no parameter change brings it back.
+above its resonance), the one the experiment settled on is an unknown of
+the experiment, not of the model: started from rest, the right model can
+settle on the other one, and no parameter change brings it back.
 """
 from dataclasses import dataclass
 
