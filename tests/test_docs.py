@@ -689,6 +689,10 @@ FIGURES = [
     Figure(GAP, "The stiff backlash (30 kN/m behind a 2.5 mm clearance) is the hardest case",
            "gap_withheld.py's CASES",
            lambda: [30 * _source_of("benchmarks/gap_withheld.py", "DeadZoneSpring(3e4, 2.5e-3)"), 2.5]),
+    Figure(GAP, "at most 2 more budgets at the reporting rate, each from where the last stopped, while a budget "
+                "gains 0.5 dB", "gap.diagnosis.LEADER_BUDGETS, LEADER_PROGRESS_DB",
+           lambda: [getattr(importlib.import_module("sklearn_pnlss.gap.diagnosis"), name)
+                    for name in ("LEADER_BUDGETS", "LEADER_PROGRESS_DB")]),
     Figure(GAP, "A training signal whose periods differ 10 times (in power) more than the",
            "gap.verdict.noise_floor.UNSETTLED_RATIO",
            lambda: [importlib.import_module("sklearn_pnlss.gap.verdict.noise_floor").UNSETTLED_RATIO]),
