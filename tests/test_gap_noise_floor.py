@@ -284,6 +284,9 @@ def test_unsettled_signals_are_those_whose_periods_differ_far_more():
     # realisation 2's periods differ as a chaotic response's do
     signals[2] = signals[2] + 1e-2 * rng.standard_normal(4 * N)
     assert unsettled_signals(signals, N) == [2]
+    # three of four chaotic: the settled one is the reference
+    chaotic = [y + 1e-2 * rng.standard_normal(4 * N) if k else y for k, y in enumerate(signals)]
+    assert unsettled_signals(chaotic, N) == [1, 2, 3]
     # one signal of several periods has nothing to compare with
     assert unsettled_signals(signals[2:3] + [base], N) == []
     assert unsettled_signals(signals, None) == []

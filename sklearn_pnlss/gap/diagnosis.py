@@ -431,11 +431,13 @@ class GapDiagnosis(BaseEstimator):
         if not self.unsettled_signals_:
             return u_list, y_list
         which = ", ".join(map(str, self.unsettled_signals_))
+        one = len(self.unsettled_signals_) == 1
         warnings.warn(
-            f"Training signal {which} never settles: its periods differ {UNSETTLED_RATIO:g} times (power) or more "
-            f"than the other signals' periods do (a chaotic response, a record started before the transient "
-            f"died, or a structure that changed during it). No periodic simulation can follow it, and its "
-            f"spread is not the sensor's noise: it is left out of the fits and the noise floor.",
+            f"Training signal{'' if one else 's'} {which} never settle{'s' if one else ''}: "
+            f"{'its' if one else 'their'} periods differ {UNSETTLED_RATIO:g} times (power) or more than the "
+            f"quietest other signal's periods do (a chaotic response, a record started before the transient "
+            f"died, or a structure that changed during it). No periodic simulation can follow such a signal, "
+            f"and its spread is not the sensor's noise: left out of the fits and the noise floor.",
             UserWarning, stacklevel=4)  # fit is wrapped by the parameter check
         keep = [i for i in range(len(u_list)) if i not in self.unsettled_signals_]
         return [u_list[i] for i in keep], [y_list[i] for i in keep]

@@ -137,8 +137,8 @@ class GapReport:
                          f"by sample")
         if self.unsettled_signals:
             which = ", ".join(str(i) for i in self.unsettled_signals)
-            lines.append(f"  training signal {which} left out: its periods differ far more than the other "
-                         f"signals' (it never settled: a chaotic response, or a record started too early)")
+            lines.append(f"  training signal {which} left out: periods that differ far more than the quietest "
+                         f"signal's (never settled: a chaotic response, or a record started too early)")
         if self.black_box is not None:
             head = f"black box (decoupled PNLSS, {self.black_box['n_params']} parameters): "
             if np.isfinite(self.black_box["gap_after_db"]):
