@@ -309,12 +309,13 @@ def test_hysteresis_under_the_tangent_stiffness_nominal():
 @pytest.mark.slow
 def test_strong_cubic_is_read_off_the_missing_force():
     """Issue 16, item 5: a cubic spring of 1e9 N/m^3 at 50 N rms, the
-    benchmark's layout (benchmarks/gap_withheld.py): k3 from the missing
-    force to 0.1 %, the nominal refitted or not (measured 9.994e8 and
-    1.0005e9; the fit from zero stopped at 5.25e7). With the nominal fixed
-    the validation multisine is chaotic under the fitted model (a 1e-6
-    change of its parameters moves it above the noise) and is left out of
-    the closure, by name."""
+    benchmark's layout (benchmarks/gap_withheld.py): k3 to 0.1 %, the
+    nominal refitted or not (the fit from zero stopped at 5.25e7), and the
+    verdict cubic_stiffness.  Recorded as measured, three of the four
+    training realisations and the validation multisine are chaotic (a 1e-6
+    change of the parameters moves the multisine above the noise): the
+    realisations are left out of the fit, the multisine out of the
+    closure, both by name."""
     import sys
     from pathlib import Path
 
@@ -329,10 +330,13 @@ def test_strong_cubic_is_read_off_the_missing_force():
                             black_box=False, effects=["cubic_stiffness", "backlash", "recalibration"],
                             free_nominal=free_nominal).fit(u, y)
         report = diag.report(u_val, y_val)
-        assert report.ranking[0].name == "cubic_stiffness"
+        # three of the four training realisations are chaotic: left out
+        assert diag.unsettled_signals_ == [1, 2, 3]
+        assert report.best_effect == "cubic_stiffness"
         assert report.ranking[0].params["k3"] == pytest.approx(1e9, rel=1e-3)
-    assert report.decision.sensitive_signals == [0]
-    assert "validation signal 0 left out" in str(report)
+        # the multisine is chaotic too: left out of the closure, by name
+        assert report.decision.sensitive_signals == [0]
+        assert "validation signal 0 left out" in str(report)
 
 
 def test_joint_starts_with_nothing_freed():
