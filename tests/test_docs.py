@@ -626,12 +626,10 @@ FIGURES = [
     Figure(GAP, "(``cubic_stiffness, with damping recalibrated by -14 %, stiffness by -4 %``;",
            "tests/test_gap_measured_data.py::test_recalibration_text_names_moved_parameters_only",
            lambda: [None, None]),
-    Figure(GAP, "at 50 N rms in the benchmark's layout is read off the missing force to within 0.1 %",
+    Figure(GAP, "50 N rms in the benchmark's layout is chaotic on three of the four training realisations and on "
+                "the validation multisine: with those left out, k3 is read to within 0.1 %",
            "tests/test_gap_measured_data.py::test_strong_cubic_is_read_off_the_missing_force (slow)",
            lambda: [50, None]),
-    Figure(GAP, "its responses are so sensitive that no candidate closes 90 % of the gap",
-           "gap.verdict.decision.EXPLAINED_CLOSURE",
-           lambda: [100 * importlib.import_module("sklearn_pnlss.gap.verdict.decision").EXPLAINED_CLOSURE]),
     Figure(GAP, "(a) the nominal read off the BLA of the same data (:func:`~sklearn_pnlss.gap.linear_nominal`), "
                 "two seeds at both strengths of every effect, and three effects removed from the candidates (49 "
                 "cases): the right effect in 44 of 44 effect cases, no false alarm, ``\"unexplained\"`` in 3 of 3 "
