@@ -260,9 +260,10 @@ class Oscillator:
             Integration rate, Hz (step ``h = 1 / fs``).
         periodic : bool
             If True, ``u_fine`` is one period of a periodic input: periods are
-            simulated from rest (or ``initial_state``) until the state at the end of a period differs
-            from its start by less than ``tol`` (relative to the state's peak
-            over the period); the last period is returned.  If False, the
+            simulated from rest (or ``initial_state``) until the state at the
+            end of a period differs from its start by less than ``tol``
+            (relative to the state's peak over the period); the last period
+            is returned.  If False, the
             simulation starts from rest (or ``initial_state``) at ``t = 0``.
         tol : float, default=1e-12
             Steady-state tolerance (periodic only).
@@ -279,8 +280,8 @@ class Oscillator:
             acceleration and the states' rates are recomputed from the
             equation of motion).  With ``periodic`` the steady-state search
             starts there: where several steady states coexist (a stiffening
-            spring near resonance), the one whose basin holds this state is
-            found.
+            spring driven above its resonance), the one whose basin holds
+            this state is found.
         warn : bool, default=True
             Warn when the steady state is not reached (callers that check
             ``n_periods`` themselves turn it off).

@@ -53,9 +53,9 @@ NON_EXCITED_DB = -60.0
 #: nearly equal forces.
 SAME_INPUT_DB = -60.0
 #: A signal whose periods differ by this much more (power ratio) than the
-#: quietest other signal's periods do has not settled.  Realisations measured by one
-#: sensor differ in that spread by chance alone by about 1 dB (four
-#: periods, thousands of lines); a chaotic response differs by tens of dB.
+#: quietest other signal's periods do has not settled.  Realisations
+#: measured by one sensor differ in that spread by chance alone by about
+#: 1 dB (four periods, thousands of lines); a chaotic response by tens of dB.
 UNSETTLED_RATIO = 10.0
 
 
@@ -142,13 +142,14 @@ def unsettled_signals(y_list, period):
     The spread over the periods (a slow trend removed, as in
     :func:`drift_free_variance`) of each signal is compared with the
     smallest of the others' spreads, the sensor's noise where one signal
-    settled; above ``UNSETTLED_RATIO`` times that, the signal never
-    settled (a cubic spring of 1e9 N/m^3 at 50 N rms is chaotic on three
-    of four multisine realisations, so a median would be chaotic too): a response that is chaotic on that realisation (a stiff
-    backlash driven hard), a record started before the transient died, or
-    a structure that changed during that record.  No periodic simulation
-    can follow such a signal, and its spread is not the sensor's noise.
-    Needs two signals of two periods or more; returns their indices.
+    settled (a median would not do: a cubic spring of 1e9 N/m^3 at 50 N
+    rms is chaotic on three of four multisine realisations).  Above
+    ``UNSETTLED_RATIO`` times that, the signal never settled: a response
+    that is chaotic on that realisation (a stiff backlash driven hard), a
+    record started before the transient died, or a structure that changed
+    during that record.  No periodic simulation can follow such a signal,
+    and its spread is not the sensor's noise.  Needs two signals of two
+    periods or more; returns their indices.
     """
     if period is None:
         return []
