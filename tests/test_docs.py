@@ -669,7 +669,7 @@ FIGURES = [
                 "effects removed from the candidates (``--strengths 2``, 49 cases): the right effect in 44 of 44 "
                 "effect cases, the delay without an effect named ``input_delay``, a nominal stiffness 5 % off (alone, "
                 "or with the damping 30 % off) named ``recalibration`` with the channel delay, ``\"unexplained\"`` in "
-                "3 of 3 removed cases, MEDIAN_D s per diagnosis (median), MAX_D s at most",
+                "3 of 3 removed cases, 94 s per diagnosis (median), 364 s at most",
            "gap_withheld.py --family d",
            lambda: [4 * _source_of("benchmarks/gap_withheld.py", "butter(4, 300.0"), 300, 2,
                     len(_results("gap_withheld_family_d")["rows"]), *_family("d")[:2],
@@ -698,7 +698,7 @@ FIGURES = [
     Figure(GAP, "A training signal whose periods differ 10 times (in power) more than the",
            "gap.verdict.noise_floor.UNSETTLED_RATIO",
            lambda: [importlib.import_module("sklearn_pnlss.gap.verdict.noise_floor").UNSETTLED_RATIO]),
-    Figure(GAP, "A training signal whose misfit is 10 times the median signal's", "gap.fitting.calibrate.JUMP_RATIO",
+    Figure(GAP, "a training signal whose misfit is 10 times the median signal's", "gap.fitting.calibrate.JUMP_RATIO",
            lambda: [importlib.import_module("sklearn_pnlss.gap.fitting.calibrate").JUMP_RATIO]),
     Figure(GAP, "stiff backlash of the first seed reaches the noise floor on validation (-102.7 dB and -103.2 dB)",
            "gap_withheld.py --family a, d",
