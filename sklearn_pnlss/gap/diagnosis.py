@@ -244,9 +244,9 @@ class GapDiagnosis(BaseEstimator):
     # ------------------------------------------------------------------
     def _signal_set(self, u_list, y_list):
         """The measured signals as simulated: each periodic one's steady
-        state searched from the state its measurement starts in."""
+        state searched from the state its measurement (``y_list``, less
+        its offsets) starts in; and the measured velocities."""
         signals = SignalSet.from_signals(u_list, self.period, self.fs, self.oversampling)
-        y_list = self._outputs(y_list)
         velocity = [signal_derivative(y, self.fs, P, self.period) for y, P in zip(y_list, signals.n_periods)]
         signals.starts = measured_starts(y_list, velocity, signals.n_periods, self.period)
         return signals, velocity
@@ -304,7 +304,11 @@ class GapDiagnosis(BaseEstimator):
         u_list, y_list = self._settled(u_list, y_list)
         effects = self._candidates()
         repeats = self.period_ is None and self._warn_if_periodic(u_list)
-        train, velocity_list = self._signal_set(u_list, y_list)
+        # The steady-state starts, the force-law starts and the black box
+        # (which has no constant term) read the measured motion, which a
+        # sensor's offset would shift.
+        y_centred = self._outputs(y_list)
+        train, velocity_list = self._signal_set(u_list, y_centred)
 
         y_all = np.concatenate(y_list)
         u_all = np.concatenate(u_list)
@@ -331,9 +335,6 @@ class GapDiagnosis(BaseEstimator):
         self.train_gap_db_ = float(10 * np.log10(np.mean(np.concatenate(
             [misfit(a, b, self.offsets) for a, b in zip(y_nominal, y_list)]) ** 2)))
 
-        # The force-law starts and the black box (which has no constant
-        # term) read the measured motion, which a sensor's offset would shift.
-        y_centred = self._outputs(y_list)
         clues = read_clues(self.nominal, u_list, y_centred, y_nominal, train.n_periods, self.period_, self.fs)
         coarse = train.coarse(self.fit_oversampling, self.nominal)
         self._log(f"fitting {len(effects)} candidates{' and the black box' if self.black_box else ''} "
@@ -512,11 +513,10 @@ class GapDiagnosis(BaseEstimator):
         """
         leader = min((e for e in effects if done[e.name].effect.n_params),
                      key=lambda e: done[e.name].train_mse, default=None)
+        floor = 0.0 if self.noise_ is None else self.noise_.variance * 10 ** (LEADER_PROGRESS_DB / 10)
         for _ in range(LEADER_BUDGETS if leader is not None else 0):
             fit = done[leader.name]
-            floor = None if self.noise_ is None else self.noise_.variance * 10 ** (LEADER_PROGRESS_DB / 10)
-            at_floor = floor is not None and fit.train_mse < floor
-            if fit.converged or at_floor:
+            if fit.converged or fit.train_mse < floor:
                 return
             warm = replace(fit.effect, starts=[fit.theta], data_start=None)
             more = run({leader.name: fit_task(warm, full_rate=True)})[leader.name]
@@ -759,7 +759,7 @@ class GapDiagnosis(BaseEstimator):
         u_list, y_list = _siso(X_val, "X_val"), _siso(y_val, "y_val")
         _check_pairs(u_list, y_list, "X_val", "y_val")
         u_list = self._inputs(u_list)
-        val, _ = self._signal_set(u_list, y_list)
+        val, _ = self._signal_set(u_list, self._outputs(y_list))
         y_nominal = simulate_signals(self.nominal, val)
         if self.period_ is None:
             self._warn_if_steady_state(u_list, y_list, y_nominal, "validation", stacklevel=3)

@@ -263,8 +263,8 @@ class Oscillator:
             simulated from rest (or ``initial_state``) until the state at the
             end of a period differs from its start by less than ``tol``
             (relative to the state's peak over the period); the last period
-            is returned.  If False, the
-            simulation starts from rest (or ``initial_state``) at ``t = 0``.
+            is returned.  If False, the simulation starts from rest (or
+            ``initial_state``) at ``t = 0``.
         tol : float, default=1e-12
             Steady-state tolerance (periodic only).
         max_periods : int, default=200
