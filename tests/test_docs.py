@@ -312,6 +312,11 @@ def _family(family):
             sum(r["ok"] for r in removed), len(removed))
 
 
+def _withheld_row(effect, seed):
+    """The clean family's row of one effect case."""
+    return next(r for r in _results("gap_withheld")["rows"] if r["true"] == effect and r["seed"] == seed)
+
+
 def _lowest_closure_vs_achievable(effect, strength):
     """The clean family's lowest closure against the achievable, in %,
     over the cases of one effect at one strength (1 or 2: seeds below or
@@ -733,15 +738,23 @@ FIGURES = [
     Figure(GAP, "(stiffness +5 %; stiffness −5 % with damping +30 %)", "benchmarks/gap_withheld.py",
            lambda: [5 * _source_of("benchmarks/gap_withheld.py", '"stiffness": 1.05 * K'),
                     -5 * _source_of("benchmarks/gap_withheld.py", '"stiffness": 0.95 * K, "damping": 1.3 * C'), 30]),
-    Figure(GAP, "where it is found, the correct effect closes at least 99.8 % of the achievable closure (the stronger "
-                "quadratic spring; the strong cubic spring 99.9 % or more,", WITHHELD,
+    Figure(GAP, "where it is found, the correct effect closes at least 97.9 % of the achievable closure (the stiff "
+                "backlash of the first seed, whose fit stops on its budget with mass, damping, both stiffnesses and "
+                "the clearance 0.15 % off, at -101.5 dB against the floor's -102.7 dB; every other case 99.8 % or "
+                "more, the strong cubic spring 99.9 % or more);", WITHHELD,
            lambda: [100 * _results("gap_withheld")["summary"]["min_closure_vs_achievable"],
-                    _lowest_closure_vs_achievable("cubic_stiffness", strength=2)]),
+                    *(lambda r: [100 * max(abs(v) for v in r["recalibrated"].values()), r["ranking"][0][1],
+                                 r["noise_floor_db"]])(_withheld_row("backlash", 100)),
+                    sorted(100 * r["closure_vs_achievable"] for r in _gap_withheld()[1])[1],
+                    _lowest_closure_vs_achievable("cubic_stiffness", strength=2)], slack=0.05),
+    Figure(GAP, "on the second seed one training realisation is chaotic and left out, and the fit on the other three "
+                "closes 99.998 % of the achievable", WITHHELD,
+           lambda: [100 * _withheld_row("backlash", 101)["closure_vs_achievable"]], slack=0.001),
     Figure(GAP, "(a 3e4 N/m spring beyond a 2.5 mm clearance, at a 2.6 mm rms response,",
            "benchmarks/gap_withheld.py (its case, and the rms of its simulated training response)",
            lambda: [3e4 * _source_of("benchmarks/gap_withheld.py", "DeadZoneSpring(3e4, 2.5e-3)"), 2.5,
                     1e3 * _withheld_backlash_rms()]),
-    Figure(GAP, "84 s per diagnosis (median), 170 s at most (the stronger backlash removed", WITHHELD,
+    Figure(GAP, "92 s per diagnosis (median), 225 s at most (that stiff backlash, carried", WITHHELD,
            lambda: [_results("gap_withheld")["summary"]["median_seconds"],
                     _results("gap_withheld")["summary"]["max_seconds"]], slack=1.0),
 ]
