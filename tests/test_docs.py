@@ -302,7 +302,7 @@ def _family(family):
     without an effect were answered right, median seconds per diagnosis, and
     the cases whose effect is removed from the candidates: answered
     "unexplained", in all."""
-    rows = _results("gap_withheld" if family == "e" else f"gap_withheld_family_{family}")["rows"]
+    rows = _family_rows(family)
     effects = [r for r in rows if r["true"] is not None and r["expected"] != "unexplained"]
     null = [r for r in rows if r["true"] is None]
     median = sorted(r["seconds"] for r in rows)[len(rows) // 2] if len(rows) % 2 else \
@@ -312,16 +312,15 @@ def _family(family):
             sum(r["ok"] for r in removed), len(removed))
 
 
-def _withheld_row(effect, seed):
-    """The clean family's row of one effect case."""
-    return next(r for r in _results("gap_withheld")["rows"] if r["true"] == effect and r["seed"] == seed)
+def _family_rows(family):
+    """A gap_withheld.py family's rows (e, the clean family: gap_withheld.json)."""
+    return _results("gap_withheld" if family == "e" else f"gap_withheld_family_{family}")["rows"]
 
 
-def _seed_101_backlash(family):
-    """A family's stiff backlash row on the second seed (its chaotic
-    realisation left out)."""
-    rows = _results("gap_withheld" if family == "e" else f"gap_withheld_family_{family}")["rows"]
-    return next(r for r in rows if r["true"] == "backlash" and r["seed"] == 101)
+def _case(family, effect, seed):
+    """A family's row of one effect case (seeds from 100: the second strength;
+    from 500: the effect removed from the candidates)."""
+    return next(r for r in _family_rows(family) if r["true"] == effect and r["seed"] == seed)
 
 
 def _lowest_closure_vs_achievable(effect, strength):
@@ -342,8 +341,7 @@ def _recalibration_case(family, seed):
 def _stiff_backlash(family):
     """The row of a family's stiff backlash case (30 kN/m behind 2.5 mm, the
     second strength)."""
-    return next(r for r in _results(f"gap_withheld_family_{family}")["rows"]
-                if r["true"] == "backlash" and r["seed"] == 100)
+    return _case(family, "backlash", 100)
 
 
 def _n_nonlinear(variables, degrees, n=3, m=1):
@@ -368,9 +366,7 @@ def _n_decoupled(r, d, n=3, m=1):
 def _stiff_backlash_nominal_errors(family):
     """How far (%) the nominal mass, damping and stiffness of a family's
     stiff-backlash case (strength 2, seed 100) are from the truth's."""
-    row = next(r for r in _results(f"gap_withheld_family_{family}")["rows"]
-               if r["true"] == "backlash" and r["seed"] == 100)
-    return [100 * abs(n / t - 1) for n, t in zip(row["nominal"], (2.0, 10.0, 5e4))]
+    return [100 * abs(n / t - 1) for n, t in zip(_stiff_backlash(family)["nominal"], (2.0, 10.0, 5e4))]
 
 
 def _mass_profile():
@@ -702,10 +698,10 @@ FIGURES = [
                     0.5e3 / 750, 1e3 / 750, 1.5e3 / 750], slack=0.01),
     Figure(GAP, "Left out, the second seed's stiff backlash closes 99.998 % of the achievable in families a, b and e",
            "gap_withheld.py --family a, b, e (backlash, seed 101)",
-           lambda: [min(100 * _seed_101_backlash(f)["closure_vs_achievable"] for f in "abe")], slack=0.001),
+           lambda: [min(100 * _case(f, "backlash", 101)["closure_vs_achievable"] for f in "abe")], slack=0.001),
     Figure(GAP, "(123 s, 112 s and 152 s; 260 s and 346 s in families a and b before).",
            "gap_withheld.py --family a, b, e (backlash, seed 101; before: the rows on ff6a337 and 38bbb02)",
-           lambda: [*[_seed_101_backlash(f)["seconds"] for f in "abe"], 260, 346], slack=1.0),
+           lambda: [*[_case(f, "backlash", 101)["seconds"] for f in "abe"], 260, 346], slack=1.0),
     Figure(GAP, "The stiff backlash (30 kN/m behind a 2.5 mm clearance) is the hardest case",
            "gap_withheld.py's CASES",
            lambda: [30 * _source_of("benchmarks/gap_withheld.py", "DeadZoneSpring(3e4, 2.5e-3)"), 2.5]),
@@ -757,12 +753,12 @@ FIGURES = [
                 "more, the strong cubic spring 99.9 % or more);", WITHHELD,
            lambda: [100 * _results("gap_withheld")["summary"]["min_closure_vs_achievable"],
                     *(lambda r: [100 * max(abs(v) for v in r["recalibrated"].values()), r["ranking"][0][1],
-                                 r["noise_floor_db"]])(_withheld_row("backlash", 100)),
+                                 r["noise_floor_db"]])(_case("e", "backlash", 100)),
                     sorted(100 * r["closure_vs_achievable"] for r in _gap_withheld()[1])[1],
                     _lowest_closure_vs_achievable("cubic_stiffness", strength=2)], slack=0.05),
     Figure(GAP, "on the second seed one training realisation is chaotic and left out, and the fit on the other three "
                 "closes 99.998 % of the achievable", WITHHELD,
-           lambda: [100 * _withheld_row("backlash", 101)["closure_vs_achievable"]], slack=0.001),
+           lambda: [100 * _case("e", "backlash", 101)["closure_vs_achievable"]], slack=0.001),
     Figure(GAP, "(a 3e4 N/m spring beyond a 2.5 mm clearance, at a 2.6 mm rms response,",
            "benchmarks/gap_withheld.py (its case, and the rms of its simulated training response)",
            lambda: [3e4 * _source_of("benchmarks/gap_withheld.py", "DeadZoneSpring(3e4, 2.5e-3)"), 2.5,
