@@ -4,8 +4,9 @@ import numpy as np
 import pytest
 from scipy.optimize import least_squares
 
-from sklearn_pnlss.gap.fitting.calibrate import (_refit_without_jumps, _solve, effect_model, fit_effect, jumped_signals,
-                                                 meaningful_ftol, parameter_covariance, per_signal_mse,
+from sklearn_pnlss.gap.fitting.calibrate import (_refit_without_outliers, _solve, effect_model, fit_effect,
+                                                 meaningful_ftol, outlying_signals, parameter_covariance,
+                                                 per_signal_mse, per_signal_sensitivity,
                                                  with_recalibration)
 from sklearn_pnlss.gap.candidates.effects import Effect, Scales, delay_signal, make_effect
 from sklearn_pnlss.gap.verdict.noise_floor import NoiseFloor
@@ -188,10 +189,20 @@ def test_meaningful_ftol():
     assert meaningful_ftol(None, 10_000) == 1e-8
 
 
-def test_jumped_signals_are_those_far_above_the_median():
-    assert jumped_signals([1.0, 1.2, 0.9, 30.0]) == [3]
-    assert jumped_signals([1.0, 1.2, 0.9, 5.0]) == []  # 7 dB: not a jump
-    assert jumped_signals([1.0, 100.0]) == []  # two signals: no median to go by
+def test_outlying_signals_are_those_far_above_the_median():
+    assert outlying_signals([1.0, 1.2, 0.9, 30.0]) == [3]
+    assert outlying_signals([1.0, 1.2, 0.9, 5.0]) == []  # 7 dB: not a jump
+    assert outlying_signals([1.0, 100.0]) == []  # two signals: no median to go by
+
+
+def test_sensitivity_is_relative_to_the_signals_size():
+    y_meas = [np.ones(10), np.ones(10), 3 * np.ones(10), np.ones(10)]
+    # the third signal three times as large and as sensitive, the fourth
+    # ten times as sensitive at the same size
+    J = np.concatenate([np.ones((10, 2)), np.ones((10, 2)), 3 * np.ones((10, 2)), 10 * np.ones((10, 2))])
+    sensitivity = per_signal_sensitivity(J, y_meas)
+    assert sensitivity[:3] == pytest.approx([2.0, 2.0, 2.0])
+    assert outlying_signals(sensitivity) == [3]
 
 
 class _JumpingObjective:
@@ -227,7 +238,7 @@ def test_a_fit_stalled_by_a_jumping_signal_is_refitted_without_it():
     stalled = _solve(_JumpingObjective(), np.array([1.005]), lower, upper, 30, 1e-10)[0]
     assert abs(stalled[0] - 1.0) > 4e-3  # on all four signals the trust region stays where it started
     obj = _JumpingObjective()
-    theta, _, refit, n_used = _refit_without_jumps(obj, stalled, obj(stalled), lower, upper, 30, 1e-10)
+    theta, _, refit, n_used = _refit_without_outliers(obj, stalled, obj(stalled), False, lower, upper, 30, 1e-10)
     assert refit is not None and theta[0] == pytest.approx(1.0, abs=1e-6)
     assert n_used > 2
     # A signal that misfits for another reason (a bias no parameter
@@ -238,5 +249,44 @@ def test_a_fit_stalled_by_a_jumping_signal_is_refitted_without_it():
     best = least_squares(lambda t: obj(t), start, bounds=(0.99905, 1.00095)).x
     mse = per_signal_mse(obj(best), obj.y_meas)
     assert mse[3] > 10 * np.median(mse)
-    theta, _, refit, _ = _refit_without_jumps(obj, best, obj(best), lower, upper, 30, 1e-10)
+    theta, _, refit, _ = _refit_without_outliers(obj, best, obj(best), True, lower, upper, 30, 1e-10)
     assert refit is None and theta[0] == best[0]
+
+
+class _NeedleObjective(_JumpingObjective):
+    """Four training signals in one parameter, zero at theta = 1 but for
+    a noise no parameter explains, the fourth far more sensitive than the
+    others and rippled: a valley about as narrow as the difference step,
+    along which the trust region crawls, while its misfit, the noise's,
+    does not stand out."""
+
+    def __init__(self, index=(0, 1, 2, 3)):
+        super().__init__(index)
+        self.y_meas = [np.ones(50) for _ in self.index]  # measured signals of one size
+        ramp = np.linspace(1.0, 2.0, 50)
+        noise = 0.1 * np.cos(np.pi * np.arange(50))
+        basis = np.linalg.qr(np.column_stack([np.ones(50), ramp]))[0]
+        self.noise = noise - basis @ (basis.T @ noise)  # orthogonal to every signal's change
+
+    def __call__(self, theta):
+        self.n_evaluations += 1
+        t = float(theta[0]) - 1.0
+        return np.concatenate([self.noise + (100 * t + 1e-3 * np.sin(3e4 * t) if i == 3
+                                             else t * np.linspace(1.0, 2.0, 50)) for i in self.index])
+
+    def subset(self, index):
+        return _NeedleObjective([self.index[i] for i in index])
+
+
+def test_a_fit_stopped_on_its_budget_is_refitted_without_its_needle_signal():
+    lower, upper = np.array([0.0]), np.array([2.0])
+    obj = _NeedleObjective()
+    stalled = np.array([1.0 + 2e-4])
+    mse = per_signal_mse(obj(stalled), obj.y_meas)
+    assert outlying_signals(mse) == []  # no signal jumped
+    theta, _, refit, n_used = _refit_without_outliers(obj, stalled, obj(stalled), False, lower, upper, 30, 1e-12)
+    assert refit is not None and theta[0] == pytest.approx(1.0, abs=1e-6)
+    assert n_used > 2  # the sensitivity (one simulation per parameter) and the refit
+    # A fit that converged is left alone: its minimum is the data's.
+    theta, _, refit, n_used = _refit_without_outliers(obj, stalled, obj(stalled), True, lower, upper, 30, 1e-12)
+    assert refit is None and theta[0] == stalled[0] and n_used == 0
