@@ -346,7 +346,8 @@ class GapDiagnosis(BaseEstimator):
             # has been refined there already)
             return delayed(fit_effect)(effect, self.nominal, self.scales_, train if full_rate else coarse, y_list,
                                        max_nfev=max_nfev, fine_signals=None if full_rate else train, clues=clues,
-                                       ftol=ftol, offsets=self.offsets)
+                                       ftol=ftol, offsets=self.offsets,
+                                       noise_variance=None if self.noise_ is None else self.noise_.variance)
 
         def aligned_clues(delay_s):
             # The clues as the delayed model sees the data: the input (and
