@@ -653,7 +653,7 @@ FIGURES = [
                 "(``--strengths 2``, 49 cases): the right effect in 44 of 44 effect cases, the stiff backlash "
                 "included (closing 99.4 % under a nominal 13-20 % off), a channel delay under the nominal's errors "
                 "named ``recalibration`` with the delay, ``recalibration`` without an effect, ``\"unexplained\"`` in "
-                "3 of 3 removed cases, 87 s per diagnosis (median)",
+                "3 of 3 removed cases, 90 s per diagnosis (median)",
            "gap_withheld.py --family b",
            lambda: [10 * _source_of("benchmarks/gap_withheld.py", "rng.uniform(0.1, 0.3, 3)"), 30, 2,
                     len(_results("gap_withheld_family_b")["rows"]), *_family("b")[:2],
