@@ -223,10 +223,16 @@ def _solve(obj, theta0, lower, upper, max_nfev, ftol):
     return res.x, res.status > 0, res.message, float(np.sum(fun(res.x) ** 2))
 
 
+def _by_signal(a, y_meas):
+    """``a`` (residuals, or Jacobian rows, of all training signals in
+    order) split into each signal's part (their lengths those of ``y_meas``)."""
+    return np.split(a, np.cumsum([y.size for y in y_meas])[:-1])
+
+
 def per_signal_mse(r, y_meas):
     """Mean squared residual of each training signal, ``r`` being the
     residuals of all of them in order (their lengths those of ``y_meas``)."""
-    return np.array([np.mean(part**2) for part in np.split(r, np.cumsum([y.size for y in y_meas])[:-1])])
+    return np.array([np.mean(part**2) for part in _by_signal(r, y_meas)])
 
 
 def outlying_signals(values, ratio=JUMP_RATIO):
@@ -244,8 +250,7 @@ def per_signal_sensitivity(J, y_meas):
     relative to the signal's size: the squared norm of its rows of the
     Jacobian ``J`` over its squared norm (a signal twice as large is not
     twice as sensitive for that)."""
-    parts = np.split(J, np.cumsum([y.size for y in y_meas])[:-1])
-    return np.array([np.sum(p**2) / max(np.sum(np.square(y)), 1e-300) for p, y in zip(parts, y_meas)])
+    return np.array([np.sum(p**2) / max(np.sum(np.square(y)), 1e-300) for p, y in zip(_by_signal(J, y_meas), y_meas)])
 
 
 def _refit_without_outliers(obj, theta, r, stalled, lower, upper, max_nfev, ftol):
