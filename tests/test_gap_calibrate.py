@@ -6,7 +6,7 @@ from scipy.optimize import least_squares
 
 from sklearn_pnlss.gap.fitting.calibrate import (_refit_without_outliers, _solve, effect_model, fit_effect,
                                                  meaningful_ftol, outlying_signals, parameter_covariance,
-                                                 per_signal_mse, per_signal_sensitivity,
+                                                 per_signal_mse, per_signal_sensitivity, stalled_near_noise,
                                                  with_recalibration)
 from sklearn_pnlss.gap.candidates.effects import Effect, Scales, delay_signal, make_effect
 from sklearn_pnlss.gap.verdict.noise_floor import NoiseFloor
@@ -291,3 +291,12 @@ def test_a_fit_stopped_on_its_budget_is_refitted_without_its_needle_signal():
     # the noise (it misses structure) is left alone.
     theta, _, refit, n_used = _refit_without_outliers(obj, stalled, obj(stalled), False, lower, upper, 30, 1e-12)
     assert refit is None and theta[0] == stalled[0] and n_used == 0
+
+
+def test_only_a_fit_stopped_close_to_the_noise_counts_as_stalled():
+    noise = 1e-10
+    assert stalled_near_noise(False, 5 * noise, noise)  # 7 dB above the noise, budget spent
+    assert stalled_near_noise(False, 10 * noise, noise)  # 10 dB: the reach's edge
+    assert not stalled_near_noise(False, 11 * noise, noise)  # missing structure, not a needle
+    assert not stalled_near_noise(True, 2 * noise, noise)  # converged: its minimum is the data's
+    assert not stalled_near_noise(False, 2 * noise, None)  # no noise estimate, no gate
