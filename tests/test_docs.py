@@ -677,7 +677,7 @@ FIGURES = [
                 "effects removed from the candidates (``--strengths 2``, 49 cases): the right effect in 44 of 44 "
                 "effect cases, the delay without an effect named ``input_delay``, a nominal stiffness 5 % off (alone, "
                 "or with the damping 30 % off) named ``recalibration`` with the channel delay, ``\"unexplained\"`` in "
-                "3 of 3 removed cases, 94 s per diagnosis (median), 364 s at most",
+                "3 of 3 removed cases, 100 s per diagnosis (median), 399 s at most",
            "gap_withheld.py --family d",
            lambda: [4 * _source_of("benchmarks/gap_withheld.py", "butter(4, 300.0"), 300, 2,
                     len(_results("gap_withheld_family_d")["rows"]), *_family("d")[:2],
