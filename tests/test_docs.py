@@ -674,10 +674,10 @@ FIGURES = [
            lambda: [100 * next(r["correct_closure"] for r in _results("gap_withheld_family_c")["rows"]
                                if r["true"] == "backlash" and r["seed"] == 101 and r["ok"])], slack=0.05),
     Figure(GAP, "(a 4th-order Butterworth at 300 Hz), two seeds at both strengths of every effect, and three "
-                "effects removed from the candidates (``--strengths 2``, 49 cases): the right effect in 44 of 44 "
+                "effects removed from the candidates (``--strengths 2``, 52 cases): the right effect in 44 of 44 "
                 "effect cases, the delay without an effect named ``input_delay``, a nominal stiffness 5 % off (alone, "
                 "or with the damping 30 % off) named ``recalibration`` with the channel delay, ``\"unexplained\"`` in "
-                "3 of 3 removed cases, 100 s per diagnosis (median), 399 s at most",
+                "6 of 6 removed cases, 98 s per diagnosis (median), 399 s at most",
            "gap_withheld.py --family d",
            lambda: [4 * _source_of("benchmarks/gap_withheld.py", "butter(4, 300.0"), 300, 2,
                     len(_results("gap_withheld_family_d")["rows"]), *_family("d")[:2],
