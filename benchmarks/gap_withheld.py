@@ -351,6 +351,8 @@ def main(argv=None):
     parser.add_argument("--strength", type=int, choices=(1, 2), default=None,
                         help="run only this strength (1 or 2); with --update, add it to the family's file")
     parser.add_argument("--only", nargs="*", default=None, help="true effects to run (names, 'null')")
+    parser.add_argument("--layouts", nargs="*", default=None, choices=LAYOUTS_C,
+                        help="family c: only the cases of these layouts (a rerun after a change that touches some)")
     parser.add_argument("--no-removed", action="store_true",
                         help="skip the cases whose true effect is removed from the candidates")
     parser.add_argument("--n-jobs", type=int, default=2)
@@ -380,6 +382,8 @@ def main(argv=None):
         candidates = [e for e in default_effects() if e != name]
         for seed in seeds:
             jobs.append((name, truth, 500 + seed, candidates, "unexplained"))
+    if args.layouts is not None:
+        jobs = [job for job in jobs if _layout(args.family, job[0], job[2]) in args.layouts]
     print(f"family {args.family}: {FAMILIES[args.family]}", flush=True)
     for name, truth, seed, candidates, expected in jobs:
         row = run_case(name, truth, seed, candidates, expected, args.n_jobs, args.family)

@@ -46,8 +46,14 @@ N_NOISE_BANDS = 16
 #: DFT lines a band needs to give a level of its own (a chi-square of 32
 #: degrees of freedom: the level to within about 1 dB).
 MIN_LINES_PER_BAND = 16
-#: A line carries no input when its power is this far below the strongest.
+#: A line carries no input when its power is this far below the record's strongest.
 NON_EXCITED_DB = -60.0
+#: Length (samples) of the Hann-windowed segments a record that is not
+#: periodic is read in.  A jump inside such a record (two realisations
+#: joined, a zero-input gap starting) leaks over every line of a window that
+#: holds it; read in segments, only the segments holding a jump lose their
+#: lines to the input test, and the others keep theirs.
+NOISE_SEGMENT = 4096
 #: Two inputs are the same realisation when they differ by less than this
 #: (relative power, dB): a shaker driven twice by one signal measures two
 #: nearly equal forces.
@@ -237,6 +243,18 @@ def _power(x, window=None):
     return np.abs(np.fft.rfft(x * window)) ** 2 / np.sum(window**2)
 
 
+def _segments(n, periodic):
+    """``(slices, window)`` a record of ``n`` samples is read in: a
+    periodic one whole and unwindowed; any other one in Hann-windowed
+    segments of ``NOISE_SEGMENT`` samples (one when it is shorter), spread
+    evenly from its first sample to its last."""
+    if periodic:
+        return [slice(0, n)], None
+    length = min(n, NOISE_SEGMENT)
+    starts = np.round(np.linspace(0, n - length, -(-n // length))).astype(int)
+    return [slice(a, a + length) for a in starts], np.hanning(length)
+
+
 def _grid(u_list, period):
     return period if period is not None else max(u.size for u in u_list)
 
@@ -303,29 +321,37 @@ def non_excited_noise(u_list, y_list, simulations, period, fs):
     A line is not excited when the input's power there is ``NON_EXCITED_DB``
     below its strongest line (DC never counts); a record that is not
     steady-state periodic (filtered noise, a ramp, realisations with gaps)
-    is read through a Hann window (see :func:`_power`).  A model that captures the
+    is read in Hann-windowed segments (see :func:`_power` and
+    ``NOISE_SEGMENT``).  A model that captures the
     effect leaves noise alone at those lines; one that does not leaves its
     unexplained harmonics too, so the smallest residual over the models is
     the tightest bound.  The selection among a dozen models of hundreds of
     lines each biases the estimate down by well under a dB.
     """
     data = _records(u_list, y_list, period)
-    windows = [None if is_periodic(u.size, period) else np.hanning(u.size) for u in u_list]
-    masks = []
-    for (u, _, _), w in zip(data, windows):
-        p = _power(u, w)
-        usable = p < p[1:].max() * 10 ** (NON_EXCITED_DB / 10)
-        usable[0] = False
-        masks.append(usable)
+    record_slices, masks, windows = [], [], []  # masks and windows: one per segment
+    for (u, _, _), u_full in zip(data, u_list):
+        slices, w = _segments(u.size, is_periodic(u_full.size, period))
+        powers = [_power(u[sl], w) for sl in slices]
+        # "no input" is relative to the record's strongest line, so that a
+        # segment of a quiet stretch (a gap, the start of a ramp) keeps its lines
+        strongest = max(p[1:].max() for p in powers)
+        for p in powers:
+            usable = p < strongest * 10 ** (NON_EXCITED_DB / 10)
+            usable[0] = False
+            masks.append(usable)
+            windows.append(w)
+        record_slices.append(slices)
     n_grid = _grid(u_list, period)
     best = None
     for name, sims in simulations.items():
         if sims is None:
             continue
-        records = []
-        for (_, y, P), (_, y_sim, _), usable, w in zip(data, _records(u_list, sims, period), masks, windows):
+        pieces = []
+        for (_, y, P), (_, y_sim, _), slices in zip(data, _records(u_list, sims, period), record_slices):
             r = (y - y_sim) * np.sqrt(P)  # a period average: back to the noise of one period
-            records.append((_power(r, w), usable, r.size))
+            pieces.extend(r[sl] for sl in slices)
+        records = [(_power(r, w), usable, r.size) for r, usable, w in zip(pieces, masks, windows)]
         if not np.all([np.all(np.isfinite(p)) for p, _, _ in records]):
             continue
         spectrum, n_lines = _banded(records, fs, n_grid)
