@@ -228,6 +228,7 @@ def test_non_excited_lines_of_a_ramp_of_joined_realisations():
     assert np.sum(whole < 1e-6 * whole[1:].max()) < 20  # one window: hardly a line is free
     floor = non_excited_noise(u, y, {"nominal": clean}, N, FS)
     assert n > 7 * NOISE_SEGMENT and floor is not None and floor.source == "non_excited_lines"
+    assert f"segments of {NOISE_SEGMENT} samples" in floor.detail
     assert abs(_db(floor.variance) - _db(np.mean(noise[0] ** 2))) < 0.5
 
 

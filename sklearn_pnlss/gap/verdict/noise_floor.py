@@ -49,10 +49,14 @@ MIN_LINES_PER_BAND = 16
 #: A line carries no input when its power is this far below the record's strongest.
 NON_EXCITED_DB = -60.0
 #: Length (samples) of the Hann-windowed segments a record that is not
-#: periodic is read in.  A jump inside such a record (two realisations
-#: joined, a zero-input gap starting) leaks over every line of a window that
-#: holds it; read in segments, only the segments holding a jump lose their
-#: lines to the input test, and the others keep theirs.
+#: periodic is read in when one window over the whole record leaves no band
+#: with enough lines free of input: a jump inside the record (two
+#: realisations joined) leaks over every line of a window that holds it, and
+#: read in segments only the segments holding a jump lose their lines.
+#: Segments are the fallback, not the rule: in a quiet stretch (a zero-input
+#: gap) the response still rings from the input before it, and their many
+#: lines near the band carry the harmonics a wrong model leaves, which raised
+#: the floor 20 dB above the noise when no candidate held the effect.
 NOISE_SEGMENT = 4096
 #: Two inputs are the same realisation when they differ by less than this
 #: (relative power, dB): a shaker driven twice by one signal measures two
@@ -243,14 +247,14 @@ def _power(x, window=None):
     return np.abs(np.fft.rfft(x * window)) ** 2 / np.sum(window**2)
 
 
-def _segments(n, periodic):
+def _segments(n, periodic, segment=None):
     """``(slices, window)`` a record of ``n`` samples is read in: a
-    periodic one whole and unwindowed; any other one in Hann-windowed
-    segments of ``NOISE_SEGMENT`` samples (one when it is shorter), spread
-    evenly from its first sample to its last."""
+    periodic one whole and unwindowed; any other one through a Hann window,
+    whole or, with ``segment``, in segments of that many samples (one when
+    the record is shorter), spread evenly from its first sample to its last."""
     if periodic:
         return [slice(0, n)], None
-    length = min(n, NOISE_SEGMENT)
+    length = min(n, segment or n)
     starts = np.round(np.linspace(0, n - length, -(-n // length))).astype(int)
     return [slice(a, a + length) for a in starts], np.hanning(length)
 
@@ -321,23 +325,40 @@ def non_excited_noise(u_list, y_list, simulations, period, fs):
     A line is not excited when the input's power there is ``NON_EXCITED_DB``
     below its strongest line (DC never counts); a record that is not
     steady-state periodic (filtered noise, a ramp, realisations with gaps)
-    is read in Hann-windowed segments (see :func:`_power` and
-    ``NOISE_SEGMENT``).  A model that captures the
+    is read through a Hann window (see :func:`_power`), in segments of
+    ``NOISE_SEGMENT`` samples when one window leaves no band enough free
+    lines.  A model that captures the
     effect leaves noise alone at those lines; one that does not leaves its
     unexplained harmonics too, so the smallest residual over the models is
     the tightest bound.  The selection among a dozen models of hundreds of
     lines each biases the estimate down by well under a dB.
     """
+    for segment in (None, NOISE_SEGMENT):
+        read = _read_non_excited(u_list, y_list, simulations, period, fs, segment)
+        if read != "no lines":
+            break
+    if read in (None, "no lines"):
+        return None
+    name, spectrum, n_lines, n_grid = read
+    pieces = f", read in Hann segments of {segment} samples" if segment else ""
+    return _from_spectrum(spectrum, n_grid, source="non_excited_lines", upper_bound=True, detail=(
+        f"residual of the {name} model at the {n_lines} DFT lines the input does not excite "
+        f"(an upper bound; no period repeated{pieces})"))
+
+
+def _read_non_excited(u_list, y_list, simulations, period, fs, segment):
+    """The best model's residual at the lines free of input, the records
+    that are not periodic read whole or in ``segment``-sample pieces
+    (:func:`_segments`).  Returns ``(name, spectrum, n_lines, n_grid)``,
+    ``"no lines"`` when no band has enough free lines, or None when no
+    model gives a finite, nonzero level."""
     data = _records(u_list, y_list, period)
     record_slices, masks, windows = [], [], []  # masks and windows: one per segment
     for (u, _, _), u_full in zip(data, u_list):
-        slices, w = _segments(u.size, is_periodic(u_full.size, period))
-        powers = [_power(u[sl], w) for sl in slices]
-        # "no input" is relative to the record's strongest line, so that a
-        # segment of a quiet stretch (a gap, the start of a ramp) keeps its lines
-        strongest = max(p[1:].max() for p in powers)
-        for p in powers:
-            usable = p < strongest * 10 ** (NON_EXCITED_DB / 10)
+        slices, w = _segments(u.size, is_periodic(u_full.size, period), segment)
+        for sl in slices:
+            p = _power(u[sl], w)
+            usable = p < p[1:].max() * 10 ** (NON_EXCITED_DB / 10)
             usable[0] = False
             masks.append(usable)
             windows.append(w)
@@ -356,16 +377,13 @@ def non_excited_noise(u_list, y_list, simulations, period, fs):
             continue
         spectrum, n_lines = _banded(records, fs, n_grid)
         if spectrum is None:
-            return None  # the same lines for every model: none to read
+            return "no lines"  # the same lines for every model: none to read
         level = sum(p[m].sum() for p, m, _ in records) / max(sum(m.sum() for _, m, _ in records), 1)
         if best is None or level < best[0]:
             best = (level, name, spectrum, n_lines)
     if best is None or not best[0] > 0:
         return None  # nothing, or exactly nothing (noiseless data): no floor to speak of
-    _, name, spectrum, n_lines = best
-    return _from_spectrum(spectrum, n_grid, source="non_excited_lines", upper_bound=True, detail=(
-        f"residual of the {name} model at the {n_lines} DFT lines the input does not excite "
-        f"(an upper bound; no period repeated)"))
+    return best[1], best[2], best[3], n_grid
 
 
 def residual_noise(y_list, y_sim, n_grid, *, name="black box", source="black_box_residual"):
