@@ -605,7 +605,7 @@ FIGURES = [
            "gap.candidates.clues.MASS_PROFILE",
            lambda: [round(100 * min(b - a for a, b in zip(_mass_profile(), _mass_profile()[1:])), 6),
                     round(100 * max(_mass_profile()), 6)]),
-    Figure(GAP, "is read in Hann-windowed segments of 4096 samples", "gap.verdict.noise_floor.NOISE_SEGMENT",
+    Figure(GAP, "the record is read in Hann windows of 4096 samples", "gap.verdict.noise_floor.NOISE_SEGMENT",
            lambda: [4096 * _source_of("sklearn_pnlss.gap.verdict.noise_floor", "NOISE_SEGMENT = 4096")]),
     Figure(GAP, "a stiff backlash under a nominal 10-30 % off", "gap_withheld.py --family b",
            lambda: [10 * _source_of("benchmarks/gap_withheld.py", "rng.uniform(0.1, 0.3, 3)"), 30]),
