@@ -664,7 +664,7 @@ FIGURES = [
                     min(_stiff_backlash_nominal_errors("b")), max(_stiff_backlash_nominal_errors("b")),
                     *_family("b")[4:], _family("b")[3] if _family("b")[2] else -1], slack=1.0),
     Figure(GAP, "cycled over the effects), two seeds at both strengths of every effect, and three effects removed "
-                "from the candidates (52 cases; six of the single-period cases measured on earlier code): the right "
+                "from the candidates (52 cases; two removed-effect cases measured on earlier code): the right "
                 "effect in 44 of 44 effect cases, no false alarm, ``\"unexplained\"`` in 6 of 6 removed cases, 67 s "
                 "per diagnosis (median;",
            "gap_withheld.py --family c",
