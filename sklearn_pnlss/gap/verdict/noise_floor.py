@@ -46,7 +46,8 @@ N_NOISE_BANDS = 16
 #: DFT lines a band needs to give a level of its own (a chi-square of 32
 #: degrees of freedom: the level to within about 1 dB).
 MIN_LINES_PER_BAND = 16
-#: A line carries no input when its power is this far below the record's strongest.
+#: A line carries no input when its power is this far below the strongest
+#: line of the record (or segment, see ``NOISE_SEGMENT``) it is read in.
 NON_EXCITED_DB = -60.0
 #: Length (samples) of the Hann-windowed segments a record that is not
 #: periodic is read in when one window over the whole record leaves no band
@@ -333,7 +334,9 @@ def non_excited_noise(u_list, y_list, simulations, period, fs):
     the tightest bound.  The selection among a dozen models of hundreds of
     lines each biases the estimate down by well under a dB.
     """
-    for segment in (None, NOISE_SEGMENT):
+    # segments change nothing for periodic records: retry only when one is not
+    any_aperiodic = not all(is_periodic(u.size, period) for u in u_list)
+    for segment in (None, NOISE_SEGMENT) if any_aperiodic else (None,):
         read = _read_non_excited(u_list, y_list, simulations, period, fs, segment)
         if read != "no lines":
             break
@@ -353,26 +356,25 @@ def _read_non_excited(u_list, y_list, simulations, period, fs, segment):
     ``"no lines"`` when no band has enough free lines, or None when no
     model gives a finite, nonzero level."""
     data = _records(u_list, y_list, period)
-    record_slices, masks, windows = [], [], []  # masks and windows: one per segment
+    reads = []  # per record: its segments, its window, each segment's lines free of input
     for (u, _, _), u_full in zip(data, u_list):
         slices, w = _segments(u.size, is_periodic(u_full.size, period), segment)
+        masks = []
         for sl in slices:
             p = _power(u[sl], w)
             usable = p < p[1:].max() * 10 ** (NON_EXCITED_DB / 10)
             usable[0] = False
             masks.append(usable)
-            windows.append(w)
-        record_slices.append(slices)
+        reads.append((slices, w, masks))
     n_grid = _grid(u_list, period)
     best = None
     for name, sims in simulations.items():
         if sims is None:
             continue
-        pieces = []
-        for (_, y, P), (_, y_sim, _), slices in zip(data, _records(u_list, sims, period), record_slices):
+        records = []
+        for (_, y, P), (_, y_sim, _), (slices, w, masks) in zip(data, _records(u_list, sims, period), reads):
             r = (y - y_sim) * np.sqrt(P)  # a period average: back to the noise of one period
-            pieces.extend(r[sl] for sl in slices)
-        records = [(_power(r, w), usable, r.size) for r, usable, w in zip(pieces, masks, windows)]
+            records.extend((_power(r[sl], w), usable, sl.stop - sl.start) for sl, usable in zip(slices, masks))
         if not np.all([np.all(np.isfinite(p)) for p, _, _ in records]):
             continue
         spectrum, n_lines = _banded(records, fs, n_grid)
