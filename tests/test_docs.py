@@ -664,9 +664,8 @@ FIGURES = [
                     min(_stiff_backlash_nominal_errors("b")), max(_stiff_backlash_nominal_errors("b")),
                     *_family("b")[4:], _family("b")[3] if _family("b")[2] else -1], slack=1.0),
     Figure(GAP, "cycled over the effects), two seeds at both strengths of every effect, and three effects removed "
-                "from the candidates (52 cases; two removed-effect cases measured on earlier code): the right "
-                "effect in 44 of 44 effect cases, no false alarm, ``\"unexplained\"`` in 6 of 6 removed cases, 67 s "
-                "per diagnosis (median;",
+                "from the candidates (52 cases): the right effect in 44 of 44 effect cases, no false alarm, "
+                "``\"unexplained\"`` in 6 of 6 removed cases, 67 s per diagnosis (median;",
            "gap_withheld.py --family c",
            lambda: [len(_results("gap_withheld_family_c")["rows"]), *_family("c")[:2], *_family("c")[4:],
                     _family("c")[3] if _family("c")[2] else -1], slack=1.0),
