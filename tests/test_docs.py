@@ -781,7 +781,7 @@ FIGURES = [
            "benchmarks/gap_withheld.py (its case, and the rms of its simulated training response)",
            lambda: [3e4 * _source_of("benchmarks/gap_withheld.py", "DeadZoneSpring(3e4, 2.5e-3)"), 2.5,
                     1e3 * _withheld_backlash_rms()]),
-    Figure(GAP, "92 s per diagnosis (median), 190 s at most (a channel delay), with", WITHHELD,
+    Figure(GAP, "88 s per diagnosis (median), 147 s at most (the stiff backlash), with", WITHHELD,
            lambda: [_results("gap_withheld")["summary"]["median_seconds"],
                     _results("gap_withheld")["summary"]["max_seconds"]], slack=1.0),
 ]
