@@ -318,9 +318,9 @@ def _family_rows(family):
 
 
 def _case(family, effect, seed):
-    """A family's row of one effect case (seeds from 100: the second strength;
-    from 500: the effect removed from the candidates)."""
-    return next(r for r in _family_rows(family) if r["true"] == effect and r["seed"] == seed)
+    """A family's row of one effect case, answered right (seeds from 100: the
+    second strength; from 500: the effect removed from the candidates)."""
+    return next(r for r in _family_rows(family) if r["true"] == effect and r["seed"] == seed and r["ok"])
 
 
 def _lowest_closure_vs_achievable(effect, strength):
@@ -334,8 +334,7 @@ def _lowest_closure_vs_achievable(effect, strength):
 def _recalibration_case(family, seed):
     """The row of a family's recalibration case (seed 0: stiffness +5 %;
     100: stiffness -5 % and damping +30 %)."""
-    return next(r for r in _results(f"gap_withheld_family_{family}")["rows"]
-                if r["true"] == "recalibration" and r["seed"] == seed and r["ok"])
+    return _case(family, "recalibration", seed)
 
 
 def _stiff_backlash(family):
@@ -696,8 +695,7 @@ FIGURES = [
     Figure(GAP, "second seed reaches -103.1 dB on validation against the floor's -103.2 dB and closes 99.8 %",
            "gap_withheld.py --family d (backlash, seed 101)",
            lambda: [*(lambda r: [r["ranking"][0][1], r["noise_floor_db"], 100 * r["correct_closure"]])(
-               next(r for r in _results("gap_withheld_family_d")["rows"] if r["true"] == "backlash"
-                    and r["seed"] == 101 and r["ok"]))], slack=0.05),
+               _case("d", "backlash", 101))], slack=0.05),
     Figure(GAP, "The filter is taken for a longer delay (1.24 ms, 1.90 ms and 2.57 ms for sensor delays of "
                 "0.67 ms, 1.33 ms and 2.00 ms)", "gap_withheld.py --family d (hysteresis, seeds 0, 100, 101)",
            lambda: [*[1e3 * r["recalibrated"]["delay_s"] for seed in (0, 100, 101)
