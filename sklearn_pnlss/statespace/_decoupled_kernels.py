@@ -143,11 +143,13 @@ def decoupled_simulate(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, U, x0):
 
 
 @numba.njit(cache=True, nogil=True)
-def decoupled_jacobian(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, U, x0, n_skip, out_branch_params, J):
+def decoupled_jacobian(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, U, x, Sx, n_skip, out_branch_params, J):
     """Output sensitivities dy(t)/dtheta for t >= n_skip, written to
     J[(t - n_skip), :, :] (shape (N - n_skip, p, n_theta)). ``Wy`` is a
     parameter (the last block) only when ``out_branch_params``; otherwise it
-    is held fixed, but still enters the output."""
+    is held fixed, but still enters the output. Resumable: ``x`` and ``Sx``
+    (n, n_sx), the state and its sensitivity at the first sample of ``U``,
+    are advanced in place to the sample after the last."""
     N, m = U.shape
     n = A.shape[0]
     p = C.shape[0]
@@ -165,15 +167,15 @@ def decoupled_jacobian(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, U, x0, n_skip, 
     zp = np.empty((r, d))
     g = np.empty(r)
     dg = np.empty(r)
-    Sx = np.zeros((n, n_sx))  # dx/dtheta for the state-moving parameters
-    Sx_next = np.empty((n, n_sx))
+    S = Sx.copy()  # dx/dtheta for the state-moving parameters
+    S_next = np.empty((n, n_sx))
     Ax = np.empty((n, n))  # A + Wx diag(g') Vx^T
     Cx = np.empty((p, n))  # C + Wy diag(g') Vx^T
-    x = x0.copy()
+    x_now = x.copy()
     x_next = np.empty(n)
     for t in range(N):
         u = U[t]
-        _stack(x, u, s)
+        _stack(x_now, u, s)
         _branches(V, G, lo, hi, linear, s, zp, g, dg)
         _linearised(A, Wx, dg, V, Ax)
         if t >= n_skip:
@@ -186,10 +188,10 @@ def decoupled_jacobian(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, U, x0, n_skip, 
                 for k in range(n):
                     c = Cx[a, k]
                     for q in range(n_sx):
-                        row[q] += c * Sx[k, q]
+                        row[q] += c * S[k, q]
                 _branch_direct(Wy[a], dg, s, zp, oV, oG, row)
                 for k in range(n):
-                    row[oC + a * n + k] = x[k]
+                    row[oC + a * n + k] = x_now[k]
                 for k in range(m):
                     row[oD + a * m + k] = u[k]
                 if out_branch_params:
@@ -198,20 +200,22 @@ def decoupled_jacobian(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, U, x0, n_skip, 
         # Sensitivity of the next state: the propagated part, then the
         # direct dependence of row i on the parameters.
         for i in range(n):
-            row = Sx_next[i]
+            row = S_next[i]
             for q in range(n_sx):
                 row[q] = 0.0
             for k in range(n):
                 c = Ax[i, k]
                 for q in range(n_sx):
-                    row[q] += c * Sx[k, q]
+                    row[q] += c * S[k, q]
             for k in range(n):
-                row[oA + i * n + k] += x[k]
+                row[oA + i * n + k] += x_now[k]
             for k in range(m):
                 row[oB + i * m + k] += u[k]
             for b in range(r):
                 row[oW + i * r + b] += g[b]
             _branch_direct(Wx[i], dg, s, zp, oV, oG, row)
-        Sx, Sx_next = Sx_next, Sx
-        _affine(A, x, B, u, Wx, g, x_next)
-        x, x_next = x_next, x
+        S, S_next = S_next, S
+        _affine(A, x_now, B, u, Wx, g, x_next)
+        x_now, x_next = x_next, x_now
+    x[:] = x_now
+    Sx[:, :] = S

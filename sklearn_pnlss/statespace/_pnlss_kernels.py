@@ -17,7 +17,9 @@ polynomial. The box is a constant of the model, not a parameter, so the
 Jacobian stays exact.
 
 The loops are written out (no ``@`` on small arrays): numba's matrix
-products allocate at every sample, which cost more than the arithmetic.
+products allocate at every sample, which cost more than the arithmetic. The
+one product that is large, the sensitivities carried to the next sample
+(n x n times n x n_sx), goes to BLAS when it is large enough to gain.
 """
 import numba
 import numpy as np
@@ -27,6 +29,12 @@ import numpy as np
 DIVERGENCE_BOUND = 1e6
 
 _jit = numba.njit(cache=True, nogil=True, inline="always")
+
+# Below this many multiply-adds per sample (n x n_sx), written-out loops beat
+# a BLAS call, whose fixed cost is of the order of a microsecond (measured:
+# Bouc-Wen, n = 3, 60 columns; F-16, n = 10, 2,860 columns: BLAS 24 GMAC/s
+# against 6 with the loops).
+_BLAS_FROM = 4096
 
 
 @_jit
@@ -120,6 +128,12 @@ def _affine(M, v, N, w, P, z, out):
 def _linearised(L, W, dterms, out):
     """out = L + W dterms: the local linear map of x (A + E dzeta/dx, or
     C + F deta/dx)."""
+    if L.shape[0] * W.shape[1] * L.shape[1] >= _BLAS_FROM:
+        np.dot(W, dterms, out)
+        for i in range(L.shape[0]):
+            for k in range(L.shape[1]):
+                out[i, k] += L[i, k]
+        return
     for i in range(L.shape[0]):
         for k in range(L.shape[1]):
             acc = L[i, k]
@@ -130,8 +144,7 @@ def _linearised(L, W, dterms, out):
 
 @_jit
 def _propagate(M, S, out):
-    """out[:, :S.shape[1]] = M S: the sensitivities carried through the
-    local linear map (into the next state's, or into the output's)."""
+    """out = M S, written out."""
     for i in range(M.shape[0]):
         for q in range(S.shape[1]):
             out[i, q] = 0.0
@@ -139,6 +152,15 @@ def _propagate(M, S, out):
             c = M[i, k]
             for q in range(S.shape[1]):
                 out[i, q] += c * S[k, q]
+
+
+@_jit
+def _carry(M, S, out):
+    """out = M S (sensitivities through the local linear map)."""
+    if M.shape[0] * S.shape[1] < _BLAS_FROM:
+        _propagate(M, S, out)
+    else:
+        np.dot(M, S, out)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -174,15 +196,26 @@ def pnlss_simulate(A, B, C, D, E, F, exE, exF, lo, hi, U, x0):
 
 
 @numba.njit(cache=True, nogil=True)
-def pnlss_jacobian(A, B, C, D, E, F, exE, exF, lo, hi, U, x0, n_skip, J):
+def pnlss_jacobian(A, B, C, D, E, F, exE, exF, lo, hi, U, x, Sx, n_skip, J):
     """Output sensitivities dy(t)/dtheta for t >= n_skip, written to
-    J[(t - n_skip), :, :] (shape (N - n_skip, p, n_theta))."""
+    J[(t - n_skip), :, :] (shape (N - n_skip, p, n_theta)).
+
+    Resumable, so that a long signal can be taken in blocks of samples
+    (memory): ``x`` (n,) is the state and ``Sx`` (n, n_sx) its sensitivity
+    to the parameters that move the state at the first sample of ``U``; both
+    are advanced in place to the sample after the last.
+
+    The sensitivities are carried through the local linear map by a matrix
+    product (BLAS): it is the bulk of the arithmetic, n^2 n_sx per sample,
+    and runs at several times the speed of written-out loops once n_sx is in
+    the hundreds.
+    """
     N, m = U.shape
     n = A.shape[0]
     p = C.shape[0]
     nE = exE.shape[0]
     nF = exF.shape[0]
-    n_sx = n * n + n * m + n * nE  # parameters that move the state
+    n_sx = Sx.shape[1]  # n * n + n * m + n * nE: parameters that move the state
     oA, oB, oE = 0, n * n, n * n + n * m
     oC = n_sx
     oD = oC + p * n
@@ -194,15 +227,16 @@ def pnlss_jacobian(A, B, C, D, E, F, exE, exF, lo, hi, U, x0, n_skip, J):
     dzeta = np.empty((nE, n))
     eta = np.empty(nF)
     deta = np.empty((nF, n))
-    Sx = np.zeros((n, n_sx))  # dx/dtheta for the state-moving parameters
-    Sx_next = np.empty((n, n_sx))
+    S = Sx.copy()  # contiguous work copies, swapped every sample
+    S_next = np.empty((n, n_sx))
+    Jx = np.empty((p, n_sx))
     Ax = np.empty((n, n))  # A + E dzeta/dx
     Cx = np.empty((p, n))  # C + F deta/dx
-    x = x0.copy()
+    x_now = x.copy()
     x_next = np.empty(n)
     for t in range(N):
         u = U[t]
-        _stack(x, u, s)
+        _stack(x_now, u, s)
         _hold(s, lo, hi, inside)
         _powers(s, pw)
         _monomial_values(exE, pw, zeta)
@@ -214,27 +248,31 @@ def pnlss_jacobian(A, B, C, D, E, F, exE, exF, lo, hi, U, x0, n_skip, J):
             _state_derivatives(exF, pw, n, deta)
             _zero_held(deta, inside)
             _linearised(C, F, deta, Cx)
+            _carry(Cx, S, Jx)
             Jt = J[t - n_skip]
-            _propagate(Cx, Sx, Jt)
             for a in range(p):
+                for q in range(n_sx):
+                    Jt[a, q] = Jx[a, q]
                 for q in range(n_sx, Jt.shape[1]):
                     Jt[a, q] = 0.0
                 for k in range(n):
-                    Jt[a, oC + a * n + k] = x[k]
+                    Jt[a, oC + a * n + k] = x_now[k]
                 for k in range(m):
                     Jt[a, oD + a * m + k] = u[k]
                 for k in range(nF):
                     Jt[a, oF + a * nF + k] = eta[k]
         # Sensitivity of the next state: the propagated part, then the
         # direct dependence of row i on its own parameters.
-        _propagate(Ax, Sx, Sx_next)
+        _carry(Ax, S, S_next)
         for i in range(n):
             for k in range(n):
-                Sx_next[i, oA + i * n + k] += x[k]
+                S_next[i, oA + i * n + k] += x_now[k]
             for k in range(m):
-                Sx_next[i, oB + i * m + k] += u[k]
+                S_next[i, oB + i * m + k] += u[k]
             for k in range(nE):
-                Sx_next[i, oE + i * nE + k] += zeta[k]
-        Sx, Sx_next = Sx_next, Sx
-        _affine(A, x, B, u, E, zeta, x_next)
-        x, x_next = x_next, x
+                S_next[i, oE + i * nE + k] += zeta[k]
+        S, S_next = S_next, S
+        _affine(A, x_now, B, u, E, zeta, x_next)
+        x_now, x_next = x_next, x_now
+    x[:] = x_now
+    Sx[:, :] = S

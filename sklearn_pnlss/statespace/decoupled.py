@@ -176,9 +176,9 @@ class DecoupledModel(StateSpaceModel):
             self.A, self.B, self.C, self.D, self.Wx, self.Wy, self.V, self.G, lo, hi, self.linear_extrapolation, U, x0
         )
 
-    def _sensitivity(self, U, x0, n_skip, J):
+    def _sensitivity(self, U, x, Sx, n_skip, J):
         lo, hi = self._bounds()
         decoupled_jacobian(
             self.A, self.B, self.C, self.D, self.Wx, self.Wy, self.V, self.G, lo, hi, self.linear_extrapolation,
-            U, x0, n_skip, self.output_branches, J,
+            U, x, Sx, n_skip, self.output_branches, J,
         )

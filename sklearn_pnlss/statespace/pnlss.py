@@ -74,6 +74,6 @@ class PNLSSModel(StateSpaceModel):
         lo, hi = self._bounds()
         return pnlss_simulate(self.A, self.B, self.C, self.D, self.E, self.F, self.exE, self.exF, lo, hi, U, x0)
 
-    def _sensitivity(self, U, x0, n_skip, J):
+    def _sensitivity(self, U, x, Sx, n_skip, J):
         lo, hi = self._bounds()
-        pnlss_jacobian(self.A, self.B, self.C, self.D, self.E, self.F, self.exE, self.exF, lo, hi, U, x0, n_skip, J)
+        pnlss_jacobian(self.A, self.B, self.C, self.D, self.E, self.F, self.exE, self.exF, lo, hi, U, x, Sx, n_skip, J)

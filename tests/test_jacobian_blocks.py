@@ -1,0 +1,87 @@
+"""The Jacobian taken in blocks of samples: the same rows as in one piece
+(the sensitivity recursion carries its state across blocks), and the same
+normal equations, whatever the block length, with time or frequency
+weights; the large products go through BLAS and agree with the loops."""
+import numpy as np
+import pytest
+
+from sklearn_pnlss.statespace import objective
+from sklearn_pnlss.statespace.decoupled import DecoupledModel
+from sklearn_pnlss.statespace.monomials import monomial_exponents
+from sklearn_pnlss.statespace.objective import SimulationError
+from sklearn_pnlss.statespace.pnlss import PNLSSModel, Segment
+
+P = 64
+
+
+def _pnlss(rng, n=3, m=1, p=2, degrees=(2, 3)):
+    exE = monomial_exponents(n + m, degrees)
+    exF = monomial_exponents(n + m, (2,))
+    return PNLSSModel(
+        A=np.diag(np.linspace(0.9, 0.3, n)) + 0.03 * rng.standard_normal((n, n)),
+        B=rng.standard_normal((n, m)), C=rng.standard_normal((p, n)), D=rng.standard_normal((p, m)),
+        E=0.01 * rng.standard_normal((n, len(exE))), F=0.01 * rng.standard_normal((p, len(exF))),
+        exE=exE, exF=exF,
+    )
+
+
+def _decoupled(rng, n=3, m=1, p=2, r=2, d=4):
+    return DecoupledModel(
+        A=np.diag(np.linspace(0.9, 0.3, n)), B=rng.standard_normal((n, m)), C=rng.standard_normal((p, n)),
+        D=rng.standard_normal((p, m)), Wx=0.05 * rng.standard_normal((n, r)), Wy=np.zeros((p, r)),
+        V=rng.standard_normal((n + m, r)), G=0.1 * rng.standard_normal((r, d)),
+    )
+
+
+@pytest.mark.parametrize("make", [_pnlss, _decoupled])
+@pytest.mark.parametrize("length", [1, 7, 64, 1000])
+def test_blocks_hold_the_rows_of_the_whole_jacobian(make, length):
+    rng = np.random.default_rng(0)
+    model = make(rng)
+    seg = Segment(0.3 * rng.standard_normal((3 * P + 11, 1)), np.zeros((3 * P, 2)), 11)
+    whole = model.segment_jacobian(seg)
+    rows = np.concatenate([J.copy() for _, J in model.jacobian_blocks(seg, length)])
+    np.testing.assert_array_equal(rows, whole)
+
+
+def test_jacobian_through_blas_is_exact():
+    """Ten states and their cubic monomials (2,860 state-moving columns,
+    carried by BLAS) against finite differences of the simulation."""
+    rng = np.random.default_rng(1)
+    n = 10
+    exE = monomial_exponents(n + 1, (2, 3), np.arange(n + 1) < n)
+    model = PNLSSModel(
+        A=np.diag(np.linspace(0.95, 0.5, n)), B=rng.standard_normal((n, 1)), C=rng.standard_normal((3, n)),
+        D=np.zeros((3, 1)), E=1e-3 * rng.standard_normal((n, len(exE))), F=np.zeros((3, 0)),
+        exE=exE, exF=np.zeros((0, n + 1), dtype=np.int64),
+    )
+    seg = Segment(0.3 * rng.standard_normal((40, 1)), np.zeros((35, 3)), 5)
+    J = model.jacobian([seg])
+    theta = model.theta
+    for q in rng.choice(theta.size, 12, replace=False):
+        d = np.zeros_like(theta)
+        d[q] = 1e-6
+        fd = (model.with_theta(theta + d).residual([seg]) - model.with_theta(theta - d).residual([seg])) / 2e-6
+        np.testing.assert_allclose(J[:, q], fd, atol=1e-7 * np.abs(J).max())
+
+
+@pytest.mark.parametrize("weighting", [None, "time", "frequency"])
+def test_normal_equations_do_not_depend_on_the_block_length(weighting, monkeypatch):
+    rng = np.random.default_rng(2)
+    model = _pnlss(rng)
+    U = 0.3 * rng.standard_normal((3 * P + 20, 1))
+    Y = rng.standard_normal((3 * P, 2))
+    extra = {
+        None: {},
+        "time": {"time_weight": rng.uniform(0, 2, (3 * P, 2))},
+        "frequency": {"freq_weight": rng.uniform(0, 2, (P // 2 + 1, 2)), "period": P},
+    }[weighting]
+    cost = SimulationError([Segment(U, Y, 20, **extra)])
+    J = objective.weigh(cost.segments[0], model.segment_jacobian(cost.segments[0]))
+    e = cost.residual(model)
+    # A block of a few samples: frequency weights round it up to a period.
+    monkeypatch.setattr(objective, "JACOBIAN_BLOCK_BYTES", 8 * 2 * model.n_params * 5)
+    G, g = cost.normal_equations(model)
+    np.testing.assert_allclose(G, J.T @ J, rtol=1e-10, atol=1e-12 * np.abs(G).max())
+    np.testing.assert_allclose(g, J.T @ e, rtol=1e-10, atol=1e-12 * np.abs(g).max())
+    assert objective.block_length(cost.segments[0], 2, model.n_params) == (P if weighting == "frequency" else 5)
