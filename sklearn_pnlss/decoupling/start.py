@@ -1,11 +1,21 @@
-"""A decoupled model started from a full PNLSS model.
+"""Starts of a decoupled model: from a full PNLSS model, or from a linear
+model alone.
 
-The nonlinear part of a PNLSS model, ``f(s) = [E zeta(s); F eta(s)]`` with
-``s = [x; u]``, is sampled along a simulated trajectory, its Jacobian tensor
-is decomposed (CPD) and the branch derivatives are fitted and integrated
-(see :mod:`sklearn_pnlss.decoupling`). The result ``W g(V^T s)`` gives the
+From a full model (:func:`decoupled_start`): the nonlinear part of a PNLSS
+model, ``f(s) = [E zeta(s); F eta(s)]`` with ``s = [x; u]``, is sampled
+along a simulated trajectory, its Jacobian tensor is decomposed (CPD) and
+the branch derivatives are fitted and integrated (see
+:mod:`sklearn_pnlss.decoupling`). The result ``W g(V^T s)`` gives the
 starting point of a :class:`~sklearn_pnlss.statespace.decoupled.DecoupledModel`.
+
+From a linear model (:func:`random_branches_start`): random branch
+directions over the linear model's states and input, branches of unit
+size on them, and ``W = 0``, so the start is the linear model itself. The
+full polynomial has a number of coefficients that grows with the cube of
+the state count (2,750 at ten states, degrees 2 and 3); a model meant for
+large structures cannot afford to fit it first.
 """
+import math
 import numbers
 
 import numpy as np
@@ -17,7 +27,7 @@ from .branches import fit_branches
 from .cpd import decompose_jacobian
 from .jacobian_tensor import polynomial_jacobian, sample_points
 
-__all__ = ["decoupled_start", "nonlinear_jacobian_tensor"]
+__all__ = ["decoupled_start", "nonlinear_jacobian_tensor", "random_branches_start"]
 
 
 def _split_linear(M, exponents, n):
@@ -137,3 +147,57 @@ def decoupled_start(pnlss_model, states_inputs, n_branches, degree, *, n_points=
         output_branches=output_branches,
     )
     return model, cpd_error
+
+
+def random_branches_start(linear_model, states_inputs, n_branches, degree, *, random_state=None):
+    """Decoupled model that equals a linear model, with random branches ready
+    to grow.
+
+    Levenberg-Marquardt from ``W = 0`` first moves ``W`` (the only branch
+    parameters the output depends on there); once the branches enter the
+    model, their directions and coefficients follow. Each start draws other
+    directions, so several starts explore several basins, as the toolbox
+    literature does.
+
+    Parameters
+    ----------
+    linear_model : state-space model with ``A, B, C, D``
+        The linear start (normalised: unit-rms states and input).
+    states_inputs : array-like of shape (n_samples, n + m)
+        Trajectory ``s(t) = [x(t); u(t)]`` of the linear model on the
+        training inputs: the directions are scaled so that each branch input
+        ``z_l = V[:, l] . s`` has unit rms along it.
+    n_branches : int
+    degree : int
+        ``d >= 2``.
+    random_state : int, RandomState, Generator or None, default=None
+        Controls the directions and the branches' coefficients.
+
+    Returns
+    -------
+    model : DecoupledModel
+        The linear part of ``linear_model``, ``Wx = Wy = 0``, ``V`` with
+        Gaussian columns scaled to unit-rms branch inputs, and ``G`` with
+        the linear term zero (it is in ``A, B``) and the others drawn from a
+        standard normal divided by the factorial of their degree, so that no
+        single power dominates on unit-size inputs.
+    """
+    A, B, C, D = (np.asarray(getattr(linear_model, k), dtype=np.float64) for k in "ABCD")
+    n, m, p = A.shape[0], B.shape[1], C.shape[0]
+    states_inputs = check_array(states_inputs, dtype=np.float64, input_name="states_inputs")
+    if states_inputs.shape[1] != n + m:
+        raise ValueError(
+            f"states_inputs must have n_states + n_inputs = {n + m} columns ([x; u]); "
+            f"got {states_inputs.shape[1]}."
+        )
+    rng = random_state if isinstance(random_state, np.random.Generator) else check_random_state(random_state)
+    V = rng.standard_normal((n + m, n_branches))
+    rms = np.sqrt(np.mean((states_inputs @ V) ** 2, axis=0))
+    V /= np.where(rms > 0, rms, 1.0)
+    powers = np.arange(1, degree + 1)
+    G = rng.standard_normal((n_branches, degree)) / np.array([math.factorial(k) for k in powers])
+    G[:, 0] = 0.0
+    return DecoupledModel(
+        A=A.copy(), B=B.copy(), C=C.copy(), D=D.copy(), Wx=np.zeros((n, n_branches)),
+        Wy=np.zeros((p, n_branches)), V=np.ascontiguousarray(V), G=G,
+    )

@@ -10,10 +10,11 @@ from sklearn.utils import check_random_state
 from sklearn.utils.validation import check_is_fitted
 
 from ..decoupling.branches import evaluate_branches
-from ..decoupling.start import decoupled_start
+from ..decoupling.start import decoupled_start, random_branches_start
 from ..inspection import lm_fit_figures
 from ..statespace.fitting import optimise
 from ..statespace.model_base import DivergenceError
+from ..statespace.scaled import normalised_linear_start
 from ..utils.handover import attach_stage
 from ..utils.parameters import Interval, Options
 from ..utils.validation import restore_layout, validate_signals
@@ -33,18 +34,23 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
     ``(2 n + d + 1) r`` nonlinear parameters (state equation) where the full
     polynomial needs them combinatorially many.
 
-    Fitting (Fakhrizadeh Esfahani et al., MSSP 2018): a full PNLSS model is
-    fitted first (``start_model``, or the one handed over in a Pipeline); the
-    Jacobian of its nonlinear part at ``n_points`` points drawn from its
-    simulated states and inputs is stacked into a tensor, whose rank-r
-    canonical polyadic decomposition gives ``W`` and ``V``; a polynomial fit
-    of the branch derivatives, integrated, gives ``g``. If that start
-    simulates unstably, it starts from ``W = 0``. All parameters are then
-    fitted by Levenberg-Marquardt on the simulation error with the exact
-    Jacobian (same objective, weighting, transient handling and divergence
-    guard as :class:`PNLSSRegressor`). ``n_init`` starts from different
-    random points run in parallel; the best is kept, by validation error when
-    validation signals are given to :meth:`fit`, else by training cost.
+    Fitting, ``init="cpd"`` (Fakhrizadeh Esfahani et al., MSSP 2018): a full
+    PNLSS model is fitted first (``start_model``, or the one handed over in a
+    Pipeline); the Jacobian of its nonlinear part at ``n_points`` points
+    drawn from its simulated states and inputs is stacked into a tensor,
+    whose rank-r canonical polyadic decomposition gives ``W`` and ``V``; a
+    polynomial fit of the branch derivatives, integrated, gives ``g``. If
+    that start simulates unstably, it starts from ``W = 0``.
+    ``init="random"`` needs no full model, whose coefficients grow with the
+    cube of the state count: it starts from the linear model (a
+    ``BLAEstimator`` fitted here or handed over) with random branch
+    directions over its states and input and ``W = 0``.
+    All parameters are then fitted by Levenberg-Marquardt on the simulation
+    error with the exact Jacobian (same objective, weighting, transient
+    handling and divergence guard as :class:`PNLSSRegressor`). ``n_init``
+    starts (other random points, or other random directions) run in
+    parallel; the best is kept, by validation error when validation signals
+    are given to :meth:`fit`, else by training cost.
 
     Parameters
     ----------
@@ -59,18 +65,25 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
     period : int or None, default=None
         Samples per period; None: the period of the Pipeline stage this
         model starts from, if any (see :class:`PNLSSRegressor`).
+    init : {"cpd", "random"}, default="cpd"
+        How the branches start. "cpd": from a full PNLSS model, by the CPD
+        of its Jacobian tensor (the paper's method). "random": from the
+        linear model, random directions and ``W = 0``: no full model is
+        fitted, which is what makes models of many states affordable.
     n_init : int, default=5
-        Starts from different random sampling points (and CPD starts).
+        Starts from different random sampling points and CPD starts
+        (``init="cpd"``) or different random directions (``"random"``).
     n_points : int, default=500
         Points at which the Jacobian of the full polynomial is sampled.
     output_branches : bool, default=False
         Let the branches enter the output equation too (``W_y`` fitted); the
         default start then carries an output polynomial as well.
     start_model : PNLSSRegressor or None, default=None
-        The full model to start from (cloned and fitted); None uses
-        ``PNLSSRegressor(n_states, degrees=(2, 3), variables="states_inputs",
-        period=period)`` (the paper's start). In a Pipeline after a fitted
-        ``PNLSSRegressor`` stage, that stage is the start instead.
+        The full model to start from (cloned and fitted; ``init="cpd"``
+        only); None uses ``PNLSSRegressor(n_states, degrees=(2, 3),
+        variables="states_inputs", period=period)`` (the paper's start). In
+        a Pipeline after a fitted ``PNLSSRegressor`` stage, that stage is the
+        start instead.
     extrapolation : {"hold", "linear", "polynomial"}, default="hold"
         What each branch does where its input leaves the range it covered in
         training (``z_range_``, widened by ``range_margin``). "hold": the
@@ -119,10 +132,11 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         Range of each branch input inside which the branch is the fitted
         polynomial (see ``extrapolation``); infinite with
         ``extrapolation="polynomial"``.
-    start_model_ : PNLSSRegressor
-        The fitted full model the decoupled model started from.
+    start_model_ : PNLSSRegressor or BLAEstimator
+        The fitted model the decoupled model started from: the full model
+        (``init="cpd"``) or the linear one (``"random"``).
     cpd_errors_ : ndarray of shape (n_init,)
-        Relative CPD error of each start.
+        Relative CPD error of each start (NaN with ``init="random"``).
     init_scores_ : ndarray of shape (n_init,)
         Validation rms error in dB (or training cost in dB) of each start
         after fitting; the lowest was kept (``best_init_``).
@@ -145,6 +159,7 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         "n_states": [Interval(Integral, 1, None, closed="left")],
         "n_branches": [Interval(Integral, 1, None, closed="left")],
         "degree": [Interval(Integral, 2, None, closed="left")],
+        "init": [Options(str, {"cpd", "random"})],
         "n_init": [Interval(Integral, 1, None, closed="left")],
         "n_points": [Interval(Integral, 2, None, closed="left")],
         "output_branches": ["boolean"],
@@ -160,6 +175,7 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         n_branches=3,
         degree=10,
         period=None,
+        init="cpd",
         n_init=5,
         n_points=500,
         output_branches=False,
@@ -180,6 +196,7 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         self.n_branches = n_branches
         self.degree = degree
         self.period = period
+        self.init = init
         self.n_init = n_init
         self.n_points = n_points
         self.output_branches = output_branches
@@ -197,16 +214,22 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         self.random_state = random_state
 
     def _fit_start(self, stage, X_list, y_list, val, weights):
-        """The fitted full PNLSS model (``start_model_``), handed over or
-        fitted here; the decoupled starts are drawn from it in
-        ``_fit_from_start``."""
+        """The fitted model the decoupled starts are drawn from in
+        ``_fit_from_start`` (``start_model_``, handed over or fitted here):
+        the full PNLSS model, or the linear one for ``init="random"``."""
+        if self.init == "random":
+            self.start_model_ = self._linear_start(stage, X_list, y_list)
+            lin = self.start_model_
+            periods = [self.period_ if self._signal_is_periodic(U.shape[0]) else None for U in X_list]
+            return normalised_linear_start(lin.A_, lin.B_, lin.C_, lin.D_, X_list, y_list, periods)
         self.start_model_ = self._start_model(stage, X_list, y_list, val, weights)
         return self.start_model_.model_
 
     def _fit_from_start(self, full, objectives, settings, val, X_list):
-        """``n_init`` decoupled starts, each a CPD of the full model's
-        Jacobian tensor along its simulation of ``X_list``, fitted in
-        parallel; the best is kept."""
+        """``n_init`` decoupled starts drawn along the start model's
+        simulation of ``X_list`` (CPDs of the full model's Jacobian tensor,
+        or random branches on the linear model), fitted in parallel; the
+        best is kept."""
         trajectory = self._trajectory(full, X_list, "start model")
         seeds = check_random_state(self.random_state).randint(np.iinfo(np.int32).max, size=self.n_init)
         runs = Parallel(n_jobs=self.n_jobs, prefer="threads")(
@@ -220,6 +243,23 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         self.init_scores_ = scores
         self.cpd_errors_ = np.array(cpd_errors)
         return fits[self.best_init_]
+
+    def _linear_start(self, stage, X_list, y_list):
+        """The fitted BLA handed over by the previous Pipeline stage, or one
+        fitted here (``init="random"``)."""
+        if stage is None:
+            return BLAEstimator(self.n_states, period=self.period_).fit(X_list, y_list)
+        if not isinstance(stage, BLAEstimator):
+            raise TypeError(
+                "DecoupledPNLSSRegressor(init='random') starts from the linear model: the previous "
+                f"Pipeline stage must be a BLAEstimator, not a {type(stage).__name__} (init='cpd' starts "
+                "from a PNLSSRegressor)."
+            )
+        if stage.n_states != self.n_states:
+            raise ValueError(
+                f"The linear model has n_states={stage.n_states} but n_states={self.n_states}; make them equal."
+            )
+        return stage
 
     def _trajectory(self, model, X_list, what):
         """Normalised ``[x; u]`` along the simulation of the training inputs
@@ -262,6 +302,11 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         return start
 
     def _one_start(self, full, trajectory, seed, objectives, settings, val):
+        if self.init == "random":
+            model = random_branches_start(full.normalised, trajectory, self.n_branches, self.degree,
+                                          random_state=seed)
+            model.output_branches = bool(self.output_branches)
+            return optimise(full.with_normalised(model), objectives, settings, val), np.nan
         model, cpd_error = decoupled_start(
             full.normalised, trajectory, self.n_branches, self.degree, n_points=self.n_points, random_state=seed,
         )

@@ -1,17 +1,17 @@
 """PNLSSRegressor: polynomial nonlinear state-space model fitted by
 Levenberg-Marquardt on the simulation error with an exact Jacobian."""
+from dataclasses import replace
 from numbers import Integral
 
 import numpy as np
 from joblib import effective_n_jobs
 from sklearn.base import clone
 
-from ..statespace.linear import is_stable, simulate_linear_signal
+from ..statespace.linear import is_stable
 from ..statespace.monomials import monomial_exponents
 from ..statespace.degree_growth import degree_stages, optimise_growing_degrees
 from ..statespace.model_base import DivergenceError
-from ..statespace.pnlss import PNLSSModel
-from ..statespace.scaled import ScaledModel, unit_rms_scales
+from ..statespace.scaled import normalised_linear_start
 from ..utils.parameters import Interval, Options
 from ._statespace import FIT_PARAMETER_CONSTRAINTS, StateSpaceRegressorBase
 from .bla import BLAEstimator
@@ -309,25 +309,14 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         """The linear start with unit-rms inputs, outputs and states, E = F = 0.
         High-degree monomials of order-one variables stay well conditioned."""
         lin = self.linear_model_
-        A, B, C, D = lin.A_, lin.B_, lin.C_, lin.D_
-        n, m, p = A.shape[0], B.shape[1], C.shape[0]
-        if np.any(np.all(np.concatenate(X_list) == 0, axis=0)):
-            raise ValueError("An input of X is identically zero: no excitation to identify a model from.")
-        # Output the states themselves (C = I, D = 0) to measure their rms.
-        states = [
-            simulate_linear_signal(A, B, np.eye(n), np.zeros((n, m)), U,
-                                   periodic_with=self.period_ if self._signal_is_periodic(U.shape[0]) else None)
-            for U in X_list
-        ]
-        u_scale, y_scale, x_scale = unit_rms_scales(X_list), unit_rms_scales(y_list), unit_rms_scales(states)
-        T, Ti = np.diag(x_scale), np.diag(1 / x_scale)
-        Su, Sy_i = np.diag(u_scale), np.diag(1 / y_scale)
-        exE, exF = self._exponents(n, m)
-        normalised = PNLSSModel(
-            A=Ti @ A @ T, B=Ti @ B @ Su, C=Sy_i @ C @ T, D=Sy_i @ D @ Su,
-            E=np.zeros((n, exE.shape[0])), F=np.zeros((p, exF.shape[0])), exE=exE, exF=exF,
-        )
-        return ScaledModel(normalised, u_scale, y_scale, x_scale)
+        periods = [self.period_ if self._signal_is_periodic(U.shape[0]) else None for U in X_list]
+        start = normalised_linear_start(lin.A_, lin.B_, lin.C_, lin.D_, X_list, y_list, periods)
+        linear = start.normalised
+        n, p = linear.A.shape[0], linear.C.shape[0]
+        exE, exF = self._exponents(n, linear.B.shape[1])
+        return start.with_normalised(replace(
+            linear, E=np.zeros((n, exE.shape[0])), F=np.zeros((p, exF.shape[0])), exE=exE, exF=exF,
+        ))
 
     def _segment_threads(self):
         # None is 1 even inside a joblib backend context (a grid search's

@@ -11,10 +11,11 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .linear import simulate_linear_signal
 from .model_base import StateSpaceModel
 from .pnlss import PNLSSModel
 
-__all__ = ["ScaledModel", "linear_scaled_model", "unit_rms_scales"]
+__all__ = ["ScaledModel", "linear_scaled_model", "normalised_linear_start", "unit_rms_scales"]
 
 
 def unit_rms_scales(signals):
@@ -125,6 +126,30 @@ class ScaledModel:
         """The model itself in the user's units (a model of the same class,
         which simulates user-unit signals directly)."""
         return self.normalised.rescaled(self.state_scale, self.input_scale, self.output_scale)
+
+
+def normalised_linear_start(A, B, C, D, X_list, y_list, periods):
+    """The linear model ``A, B, C, D`` (user units) normalised to unit-rms
+    inputs, outputs and states on the training signals: where the nonlinear
+    fits start, since high-degree terms of order-one variables stay well
+    conditioned.
+
+    ``periods`` gives, per signal of ``X_list``, its period when it is
+    periodic steady state (else None): the states' rms is read off the
+    linear model's simulation of it. Returns a :class:`ScaledModel` of a
+    polynomial model without monomials.
+    """
+    if np.any(np.all(np.concatenate(X_list) == 0, axis=0)):
+        raise ValueError("An input of X is identically zero: no excitation to identify a model from.")
+    n, m = A.shape[0], B.shape[1]
+    # Output the states themselves (C = I, D = 0) to measure their rms.
+    states = [simulate_linear_signal(A, B, np.eye(n), np.zeros((n, m)), U, periodic_with=per)
+              for U, per in zip(X_list, periods)]
+    u_scale, y_scale, x_scale = unit_rms_scales(X_list), unit_rms_scales(y_list), unit_rms_scales(states)
+    T, Ti = np.diag(x_scale), np.diag(1 / x_scale)
+    Su, Sy_i = np.diag(u_scale), np.diag(1 / y_scale)
+    linear = linear_scaled_model(Ti @ A @ T, Ti @ B @ Su, Sy_i @ C @ T, Sy_i @ D @ Su)
+    return ScaledModel(linear.normalised, u_scale, y_scale, x_scale)
 
 
 def linear_scaled_model(A, B, C, D):

@@ -143,8 +143,7 @@ def _estimate_bd(A, C, G, z, w, estimate_d=True, a=0.0):
         CM = np.linalg.solve((np.eye(n) + a * A).T, C.T).T
         CP = CP + a * CM
     # vec(CP B + D) = (I_m kron CP) vec(B) + (I_m kron I_p) vec(D)
-    blocks = [np.kron(np.eye(m), CP[k]) for k in range(K)]  # (p m, n m)
-    M = np.stack(blocks)
+    M = np.einsum("bc,kai->kbaci", np.eye(m), CP).reshape(K, m * p, m * n)  # I_m kron CP per line
     if estimate_d:
         M = np.concatenate([M, np.broadcast_to(np.eye(p * m), (K, p * m, p * m))], axis=2)
     rhs = G.transpose(0, 2, 1).reshape(K, p * m)  # column-major vec per line
