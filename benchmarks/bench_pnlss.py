@@ -106,13 +106,14 @@ def _timed_fit(X, y, degrees, iterations, average):
     est = PNLSSRegressor(3, degrees=degrees, variables="states", period=8192, max_iter=iterations,
                          tol=0.0, average_periods=average, grow_degrees=False)
     with timers.wrap(SimulationError, "residual", "simulation"), \
-            timers.wrap(PNLSSModel, "segment_jacobian", "jacobian_segment"), \
+            timers.wrap(PNLSSModel, "_sensitivity", "jacobian_segment"), \
             timers.wrap(SimulationError, "normal_equations", "normal_equations"), \
             timers.wrap(engine, "levenberg_marquardt", "lm"):
         t0 = time.perf_counter()
         est.fit(X, y)
         t_fit = time.perf_counter() - t0
     c = timers.calls
+    # Kernel calls per normal-equations call: every segment, in its blocks.
     n_seg = len(c["jacobian_segment"]) // len(c["normal_equations"])
     jac = np.add.reduceat(c["jacobian_segment"], np.arange(0, len(c["jacobian_segment"]), n_seg))
     t_lm = sum(c["lm"])

@@ -17,7 +17,6 @@ several threads: the compiled kernels and the BLAS products release the GIL.
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
-from scipy.linalg.blas import dsyrk
 from threadpoolctl import ThreadpoolController
 
 __all__ = ["SimulationError", "weigh"]
@@ -112,9 +111,13 @@ class SimulationError:
 
         def chunk_sums(segments):
             # Accumulated in place: one Gram matrix per thread, not per
-            # segment, its upper triangle by syrk (half the flops of a
-            # general product), and one Jacobian block at a time.
-            G = np.zeros((model.n_params, model.n_params), order="F")
+            # segment, one Jacobian block at a time. numpy's product (syrk
+            # for J^T J) rather than SciPy's BLAS: the eigendecomposition of
+            # the step is numpy's too, and two BLAS libraries whose threads
+            # wait in turn for work slowed a two-thread fit twofold (Bouc-Wen,
+            # degrees 3, 5, 7).
+            G = np.zeros((model.n_params, model.n_params))
+            product = np.empty_like(G)
             g = np.zeros(model.n_params)
             for seg in segments:
                 err = model.segment_error(seg)
@@ -124,9 +127,9 @@ class SimulationError:
                 for start, J in model.jacobian_blocks(seg, L):
                     e = weigh(seg, err[start : start + J.shape[0], :, None], start)[:, 0]
                     Jw = weigh(seg, J, start)
-                    G = dsyrk(1.0, Jw.T, beta=1.0, c=G, trans=0, lower=0, overwrite_c=1)
+                    G += np.matmul(Jw.T, Jw, out=product)
                     g += Jw.T @ e
-            return np.triu(G) + np.triu(G, 1).T, g
+            return G, g
 
         parts = self._over_chunks(chunk_sums)
         if any(part is None for part in parts):

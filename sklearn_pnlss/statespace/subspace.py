@@ -25,7 +25,7 @@ import numpy as np
 from scipy.linalg import qr, sqrtm, svd
 
 from .levenberg_marquardt import levenberg_marquardt
-from .linear import frequency_response, is_stable, stabilize
+from .linear import frequency_response, is_stable, resolvent_products, stabilize
 
 __all__ = ["fd_subspace", "fd_refine", "frf_weights", "band_warp", "warp_model"]
 
@@ -135,10 +135,7 @@ def _estimate_bd(A, C, G, z, w, estimate_d=True, a=0.0):
     K, p, m = G.shape
     n = A.shape[0]
     # C (zI - A)^-1, shape (K, p, n)
-    CP = np.linalg.solve(
-        (z[:, None, None] * np.eye(n) - A).transpose(0, 2, 1),
-        np.broadcast_to(C.T, (K, n, p)),
-    ).transpose(0, 2, 1)
+    _, CP = resolvent_products(A, z, C=C)
     if not estimate_d and a != 0.0:
         CM = np.linalg.solve((np.eye(n) + a * A).T, C.T).T
         CP = CP + a * CM
@@ -349,16 +346,17 @@ def fd_refine(A, B, C, D, G, z, *, var=None, estimate_d=True, max_iter=100, warp
     # In zeta the direct term is free, or tied to D = 0 in z (fd_subspace).
     tied = not estimate_d and a != 0.0
 
-    def residual_and_jac(theta):
+    def residual_and_jac(theta, jacobian=True):
         A_, B_, C_, D_ = _unpack(theta, n, m, p, estimate_d)
-        res = zw[:, None, None] * eye - A_
-        PB = np.linalg.solve(res, np.broadcast_to(B_, (K, n, m)))  # (K,n,m)
-        CP = np.linalg.solve(res.transpose(0, 2, 1), np.broadcast_to(C_.T, (K, n, p))).transpose(0, 2, 1)
+        PB, CP = resolvent_products(A_, zw, B=B_, C=C_ if jacobian else None)  # (K,n,m), (K,p,n)
         if tied:
             Minv = np.linalg.inv(eye + a * A_)
             MB, CM = Minv @ B_, C_ @ Minv
             D_ = a * CM @ MB
         E = (D_[None] + C_[None] @ PB - G) * w[:, None, None]  # (K,p,m)
+        if not jacobian:
+            E = E.ravel()
+            return np.concatenate([E.real, E.imag]), None
         # dG_ab/dA_ij = CP_ai PB_jb ; dG_ab/dB_ij = CP_ai d_jb ; dG_ab/dC_ij = d_ai PB_jb
         JA = np.einsum("kai,kjb->kabij", CP, PB).reshape(K, p, m, n * n)
         JB = np.einsum("kai,jb->kabij", CP, np.eye(m)).reshape(K, p, m, n * m)
@@ -389,7 +387,7 @@ def fd_refine(A, B, C, D, G, z, *, var=None, estimate_d=True, max_iter=100, warp
             return None
         with np.errstate(all="ignore"):
             try:
-                return residual_and_jac(theta)[0]
+                return residual_and_jac(theta, jacobian=False)[0]
             except np.linalg.LinAlgError:  # a pole exactly on an excited line
                 return None
 
