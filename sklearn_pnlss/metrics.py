@@ -30,7 +30,7 @@ def to_db(value):
         return 20.0 * np.log10(value)
 
 
-def rms_error(y_true, y_pred, db=False):
+def rms_error(y_true, y_pred, db=False, skip=0):
     """Root-mean-square simulation error over all signals, samples and outputs.
 
     Signals are concatenated, so a long signal weighs more than a short one,
@@ -42,6 +42,10 @@ def rms_error(y_true, y_pred, db=False):
         Signals in the library convention (3-D array, list, or one signal).
     db : bool, default=False
         Return ``20 log10(rms)`` instead of the rms in the signal's units.
+    skip : int, default=0
+        Samples left out at the start of every signal: the
+        state-initialisation window a benchmark's official score skips
+        (``load_benchmark(...).skip``).
 
     Returns
     -------
@@ -54,13 +58,14 @@ def rms_error(y_true, y_pred, db=False):
     >>> rms_error(np.zeros(4), np.full(4, 1e-3), db=True)
     -60.0
     """
-    true, pred = _pooled(y_true, y_pred)
+    true, pred = _pooled(y_true, y_pred, skip)
     value = np.sqrt(np.mean((true - pred) ** 2))
     return float(to_db(value)) if db else float(value)
 
 
-def _pooled(y_true, y_pred):
-    """All samples of all signals, (n_total_samples, n_outputs), of both."""
+def _pooled(y_true, y_pred, skip=0):
+    """All samples of all signals but the first ``skip`` of each,
+    (n_total_samples, n_outputs), of both."""
     true, _ = as_signal_list(y_true, name="y_true", min_samples=1)
     pred, _ = as_signal_list(y_pred, name="y_pred", min_samples=1)
     if len(true) != len(pred) or any(a.shape != b.shape for a, b in zip(true, pred)):
@@ -69,13 +74,22 @@ def _pooled(y_true, y_pred):
             f"same shapes; got {[a.shape for a in true]} and "
             f"{[b.shape for b in pred]}."
         )
-    return np.concatenate(true), np.concatenate(pred)
+    skip = int(skip)
+    if skip < 0 or any(a.shape[0] <= skip for a in true):
+        raise ValueError(
+            f"skip={skip} must be non-negative and shorter than every signal "
+            f"(lengths {[a.shape[0] for a in true]})."
+        )
+    return np.concatenate([a[skip:] for a in true]), np.concatenate([b[skip:] for b in pred])
 
 
-def nrmse(y_true, y_pred):
+def nrmse(y_true, y_pred, skip=0):
     """Normalised rms error: ``||y - y_hat|| / ||y - mean(y)||`` per output
     over all signals, averaged over the outputs (0 is perfect, 1 is no
-    better than the mean; MATLAB's ``goodnessOfFit(..., "NRMSE")``).
+    better than the mean; MATLAB's ``goodnessOfFit(..., "NRMSE")``; the
+    rms error over the standard deviation, as the field's loader scores).
+    ``skip``: samples left out at the start of every signal (see
+    :func:`rms_error`).
 
     Examples
     --------
@@ -84,15 +98,16 @@ def nrmse(y_true, y_pred):
     >>> round(nrmse(y, 0.9 * y), 12)
     0.1
     """
-    true, pred = _pooled(y_true, y_pred)
+    true, pred = _pooled(y_true, y_pred, skip)
     spread = np.linalg.norm(true - true.mean(axis=0), axis=0)
     with np.errstate(divide="ignore", invalid="ignore"):
         return float(np.mean(np.linalg.norm(true - pred, axis=0) / spread))
 
 
-def fit_percent(y_true, y_pred):
+def fit_percent(y_true, y_pred, skip=0):
     """The "fit" of MATLAB's ``compare``: ``100 (1 - NRMSE)`` in percent
-    (100 is perfect, 0 no better than the mean, negative worse).
+    (100 is perfect, 0 no better than the mean, negative worse). ``skip``:
+    see :func:`rms_error`.
 
     Examples
     --------
@@ -101,7 +116,7 @@ def fit_percent(y_true, y_pred):
     >>> round(fit_percent(y, 0.9 * y), 6)
     90.0
     """
-    return 100.0 * (1.0 - nrmse(y_true, y_pred))
+    return 100.0 * (1.0 - nrmse(y_true, y_pred, skip))
 
 
 def max_error(y_true, y_pred):

@@ -9,6 +9,7 @@ from sklearn_pnlss.statespace.linear import (
     is_stable,
     modal_parameters,
     periodic_initial_state,
+    resolvent_products,
     simulate_linear,
     simulate_linear_signal,
     stabilize,
@@ -78,3 +79,19 @@ def test_stabilize_reflects_unstable_poles_and_keeps_stable_ones():
     np.testing.assert_allclose(np.sort(np.abs(np.angle(poles))), [0.0, 0.3, 0.3], atol=1e-10)
     np.testing.assert_array_equal(stabilize(stable), stable)
     assert not is_stable(np.diag([0.95, 0.2]), margin=0.1) and is_stable(np.diag([0.85, 0.2]), margin=0.1)
+
+
+@pytest.mark.parametrize("A", [
+    np.diag([0.9, 0.5, -0.3]) + 0.05 * np.random.default_rng(3).standard_normal((3, 3)),  # diagonalisable
+    np.array([[0.8, 1.0, 0.0], [0.0, 0.8, 1.0], [0.0, 0.0, 0.8]]),  # a Jordan block: solved line by line
+], ids=["eigendecomposition", "defective"])
+def test_resolvent_products_equal_the_solves(A):
+    rng = np.random.default_rng(4)
+    B, C = rng.standard_normal((3, 2)), rng.standard_normal((4, 3))
+    z = np.exp(1j * np.linspace(0.01, 3.0, 50))
+    PB, CP = resolvent_products(A, z, B=B, C=C)
+    R = np.linalg.inv(z[:, None, None] * np.eye(3) - A)
+    np.testing.assert_allclose(PB, R @ B, rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(CP, C @ R, rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(frequency_response(A, B, C, np.zeros((4, 2)), z), C @ R @ B, rtol=1e-10, atol=1e-12)
+    assert resolvent_products(A, z)[0] is None

@@ -1,0 +1,69 @@
+"""The field's measured benchmarks by their official splits (the
+``nonlinear-benchmarks`` loader's), read from ../shared/data when present;
+the conversion of the loader's objects; metrics that skip the
+state-initialisation window."""
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from sklearn_pnlss.datasets import from_io_data, load_benchmark
+from sklearn_pnlss.metrics import fit_percent, make_signal_scorer, nrmse, rms_error
+
+DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+
+
+@pytest.mark.parametrize("name, n_train, n_test, skip, ts, y_test_std", [
+    # The official split of WH2009: samples 5,200-183,999, the first 100,000 estimate.
+    ("wh2009", 100000, 78800, 50, 1 / 51200, 0.2439),
+    ("cascaded_tanks", 1024, 1024, 50, 4.0, 2.0993),
+    ("emps", 24841, 24841, 20, 1e-3, 0.08266),
+])
+def test_official_splits(name, n_train, n_test, skip, ts, y_test_std):
+    if not (DATA / name).is_dir():
+        pytest.skip(f"../shared/data/{name} not present")
+    data = load_benchmark(name, DATA)  # a folder of benchmark folders
+    same = load_benchmark(name, DATA / name)  # or the benchmark's own folder
+    assert data.X_train.shape == data.y_train.shape == (1, n_train, 1)
+    assert data.X_test.shape == data.y_test.shape == (1, n_test, 1)
+    assert data.skip == skip and np.isclose(data.sampling_time, ts, rtol=1e-4)
+    assert np.isclose(data.y_test.std(), y_test_std, rtol=1e-3)
+    np.testing.assert_array_equal(same.y_test, data.y_test)
+    assert np.all(np.isfinite(data.X_train)) and np.all(np.isfinite(data.y_test))
+
+
+def test_missing_files_say_where_to_look(tmp_path, monkeypatch):
+    monkeypatch.delenv("SKLEARN_PNLSS_BENCHMARK_DATA", raising=False)
+    with pytest.raises(FileNotFoundError, match="SKLEARN_PNLSS_BENCHMARK_DATA"):
+        load_benchmark("wh2009")
+    with pytest.raises(FileNotFoundError, match="not in"):
+        load_benchmark("emps", tmp_path)
+    with pytest.raises(ValueError, match="one of"):
+        load_benchmark("silverbox", tmp_path)
+
+
+def test_loader_objects_become_signals():
+    records = [SimpleNamespace(u=np.arange(10.0), y=np.arange(10.0) ** 2, state_initialization_window_length=None),
+               SimpleNamespace(u=np.ones((7, 2)), y=np.zeros(7), state_initialization_window_length=3)]
+    X, y, skip = from_io_data(records)
+    assert [x.shape for x in X] == [(10, 1), (7, 2)] and [v.shape for v in y] == [(10, 1), (7, 1)]
+    assert skip == 3
+    with pytest.raises(TypeError, match="Input_output_data"):
+        from_io_data([np.zeros(3)])
+
+
+def test_metrics_skip_the_initialisation_window():
+    y = np.sin(np.linspace(0, 20, 200))
+    pred = y.copy()
+    pred[:50] += 10.0  # a transient the official score does not count
+    pred[50:] += 0.01
+    assert np.isclose(rms_error(y, pred, skip=50), 0.01)
+    assert rms_error(y, pred) > 1
+    assert np.isclose(nrmse(y, pred, skip=50), 0.01 / y[50:].std(), rtol=1e-9)
+    assert np.isclose(fit_percent(y, pred, skip=50), 100 * (1 - 0.01 / y[50:].std()))
+    scorer = make_signal_scorer(rms_error, greater_is_better=False, skip=50)
+    model = SimpleNamespace(predict=lambda X: pred)
+    assert np.isclose(scorer(model, None, y), -0.01)
+    with pytest.raises(ValueError, match="skip"):
+        rms_error(y, pred, skip=200)
