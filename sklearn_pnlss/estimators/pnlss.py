@@ -172,7 +172,9 @@ class PNLSSRegressor(StateSpaceRegressorBase):
     validation_history_ : ndarray of shape (``n_iter_ + 1``,)
         rms error in dB on the validation signals after each iteration,
         all stages in turn (only when validation signals were given to
-        :meth:`fit`).
+        :meth:`fit`); inf where the model diverges on them, or, for an
+        iterate better than every earlier one, where it runs away on them
+        amplified 1.2 times.
     best_iteration_ : int
         Iteration whose parameters were kept, counted over all stages: the
         last one, or the one best on the validation signals.

@@ -220,31 +220,35 @@ class StateSpaceModel:
             pass
         return J
 
-    def jacobian_blocks(self, seg, block_length, out=None):
+    def jacobian_blocks(self, seg, block_length, out=None, buffer=None):
         """The rows of :meth:`segment_jacobian` ``block_length`` samples at a
         time: yields ``(start, J_block)``, ``J_block`` of shape (L, p,
         n_params) holding rows ``start:start + L`` of the segment's error.
 
         The sensitivity recursion runs once through the signal, carrying its
-        state from block to block, so only one block is ever held; each block
-        is written into the same buffer (``out``, or one made here), valid
-        until the next one is asked for. On a long signal with many
-        parameters this is the difference between a block of tens of
+        state from block to block, so only one block is ever held. Each block
+        is written into the same work array (``buffer``, of at least
+        ``block_length`` rows, or one made here), valid until the next block
+        is asked for; with ``out`` (the whole Jacobian, (T, p, n_params)),
+        each block is written into its rows instead. On a long signal with
+        many parameters this is the difference between a block of tens of
         megabytes and a Jacobian of gigabytes, whose first touch alone cost
         more than its arithmetic (F-16, 2,893 parameters: 1.5 s of 2.3 s per
-        8,192-sample segment).
+        8,192-sample segment); a ``buffer`` reused from segment to segment
+        spares even the block's.
         """
         U = np.ascontiguousarray(seg.U)
         T = U.shape[0] - seg.n_skip
         block_length = max(1, min(int(block_length), T))
-        buf = out if out is not None else np.empty((block_length, self.C.shape[0], self.n_params))
+        if out is None and buffer is None:
+            buffer = np.empty((block_length, self.C.shape[0], self.n_params))
         x = np.zeros(self.n_states)
         Sx = np.zeros((self.n_states, self.n_state_params))
         # The transient before the first row, then the blocks of rows.
-        self._sensitivity(U[: seg.n_skip], x, Sx, seg.n_skip, buf[:0])
+        self._sensitivity(U[: seg.n_skip], x, Sx, seg.n_skip, (out if out is not None else buffer)[:0])
         for start in range(0, T, block_length):
             stop = min(start + block_length, T)
-            J = buf[: stop - start] if out is None else buf[start:stop]
+            J = out[start:stop] if out is not None else buffer[: stop - start]
             self._sensitivity(U[seg.n_skip + start : seg.n_skip + stop], x, Sx, 0, J)
             yield start, J
 

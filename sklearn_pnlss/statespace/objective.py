@@ -119,12 +119,15 @@ class SimulationError:
             G = np.zeros((model.n_params, model.n_params))
             product = np.empty_like(G)
             g = np.zeros(model.n_params)
+            buffer = None  # one work array for the blocks of all segments
             for seg in segments:
                 err = model.segment_error(seg)
                 if err is None:
                     return None
-                L = block_length(seg, err.shape[1], model.n_params)
-                for start, J in model.jacobian_blocks(seg, L):
+                L = min(block_length(seg, err.shape[1], model.n_params), err.shape[0])
+                if buffer is None or buffer.shape[0] < L:
+                    buffer = np.empty((L, err.shape[1], model.n_params))
+                for start, J in model.jacobian_blocks(seg, L, buffer=buffer):
                     e = weigh(seg, err[start : start + J.shape[0], :, None], start)[:, 0]
                     Jw = weigh(seg, J, start)
                     G += np.matmul(Jw.T, Jw, out=product)
