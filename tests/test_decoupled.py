@@ -73,6 +73,8 @@ def test_random_init_refuses_a_pnlss_stage():
     full = PNLSSRegressor(2, degrees=(2, 3), period=N, max_iter=2).fit(X, y)
     with pytest.raises(TypeError, match="init='random'.*BLAEstimator"):
         DecoupledPNLSSRegressor(2, period=N, init="random").fit(full.transform(X), y)
+    with pytest.raises(ValueError, match="start_model"):
+        DecoupledPNLSSRegressor(2, period=N, init="random", start_model=PNLSSRegressor(2)).fit(X, y)
 
 
 def test_pipeline_chains_bla_pnlss_decoupled():

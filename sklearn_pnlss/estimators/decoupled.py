@@ -218,6 +218,11 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         ``_fit_from_start`` (``start_model_``, handed over or fitted here):
         the full PNLSS model, or the linear one for ``init="random"``."""
         if self.init == "random":
+            if self.start_model is not None:
+                raise ValueError(
+                    "start_model is the full model of init='cpd'; init='random' starts from the linear "
+                    "model: leave start_model None (or use init='cpd')."
+                )
             self.start_model_ = self._linear_start(stage, X_list, y_list)
             lin = self.start_model_
             periods = [self.period_ if self._signal_is_periodic(U.shape[0]) else None for U in X_list]
