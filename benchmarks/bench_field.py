@@ -45,30 +45,13 @@ def models(name):
 
     from sklearn_pnlss import BLAEstimator, PNLSSRegressor
 
-    if name == "wh2009":
-        n = 6
-        return [
-            ("BLA", {"n_states": n}, lambda: BLAEstimator(n, fs=51200.0)),
-            ("PNLSS", {"n_states": n, "degrees": [2, 3], "variables": "states_inputs", "equations": "both",
-                       "max_iter": 100},
-             lambda: make_pipeline(BLAEstimator(n, fs=51200.0),
-                                   PNLSSRegressor(n, degrees=(2, 3), variables="states_inputs", equations="both",
-                                                  max_iter=100))),
-        ]
-    if name == "cascaded_tanks":
-        n = 2
-        return [
-            ("BLA", {"n_states": n}, lambda: BLAEstimator(n, fs=0.25)),
-            ("PNLSS", {"n_states": n, "degrees": [2, 3], "variables": "states_inputs", "equations": "both",
-                       "max_iter": 100},
-             lambda: make_pipeline(BLAEstimator(n, fs=0.25),
-                                   PNLSSRegressor(n, degrees=(2, 3), variables="states_inputs", equations="both",
-                                                  max_iter=100))),
-        ]
-    if name == "emps":
-        n = 2
-        return [("BLA", {"n_states": n}, lambda: BLAEstimator(n, fs=1000.0))]
-    raise ValueError(name)
+    n, fs = {"wh2009": (6, 51200.0), "cascaded_tanks": (2, 0.25), "emps": (2, 1000.0)}[name]
+    rows = [("BLA", {"n_states": n}, lambda: BLAEstimator(n, fs=fs))]
+    if name in ("wh2009", "cascaded_tanks"):
+        pnlss = {"degrees": (2, 3), "variables": "states_inputs", "equations": "both", "max_iter": 100}
+        rows.append(("PNLSS", {"n_states": n, **pnlss},
+                     lambda: make_pipeline(BLAEstimator(n, fs=fs), PNLSSRegressor(n, **pnlss))))
+    return rows
 
 
 def run(name, data_dir):
