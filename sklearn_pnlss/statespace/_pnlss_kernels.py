@@ -30,10 +30,11 @@ DIVERGENCE_BOUND = 1e6
 
 _jit = numba.njit(cache=True, nogil=True, inline="always")
 
-# Below this many multiply-adds per sample (n x n_sx), written-out loops beat
-# a BLAS call, whose fixed cost is of the order of a microsecond (measured:
-# Bouc-Wen, n = 3, 60 columns; F-16, n = 10, 2,860 columns: BLAS 24 GMAC/s
-# against 6 with the loops).
+# Below this many multiply-adds in one matrix product, written-out loops beat
+# a BLAS call, whose fixed cost is of the order of a microsecond (measured on
+# the sensitivities carried to the next sample, n x n times n x n_sx:
+# Bouc-Wen, n = 3, 60 columns, loops faster; F-16, n = 10, 2,860 columns,
+# BLAS 24 GMAC/s against 6 with the loops).
 _BLAS_FROM = 4096
 
 
@@ -157,7 +158,7 @@ def _propagate(M, S, out):
 @_jit
 def _carry(M, S, out):
     """out = M S (sensitivities through the local linear map)."""
-    if M.shape[0] * S.shape[1] < _BLAS_FROM:
+    if M.shape[0] * M.shape[1] * S.shape[1] < _BLAS_FROM:
         _propagate(M, S, out)
     else:
         np.dot(M, S, out)

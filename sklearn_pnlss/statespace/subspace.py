@@ -353,10 +353,10 @@ def fd_refine(A, B, C, D, G, z, *, var=None, estimate_d=True, max_iter=100, warp
             Minv = np.linalg.inv(eye + a * A_)
             MB, CM = Minv @ B_, C_ @ Minv
             D_ = a * CM @ MB
-        E = (D_[None] + C_[None] @ PB - G) * w[:, None, None]  # (K,p,m)
+        E = ((D_[None] + C_[None] @ PB - G) * w[:, None, None]).ravel()  # (K,p,m) flattened
+        e = np.concatenate([E.real, E.imag])
         if not jacobian:
-            E = E.ravel()
-            return np.concatenate([E.real, E.imag]), None
+            return e, None
         # dG_ab/dA_ij = CP_ai PB_jb ; dG_ab/dB_ij = CP_ai d_jb ; dG_ab/dC_ij = d_ai PB_jb
         JA = np.einsum("kai,kjb->kabij", CP, PB).reshape(K, p, m, n * n)
         JB = np.einsum("kai,jb->kabij", CP, np.eye(m)).reshape(K, p, m, n * m)
@@ -374,8 +374,7 @@ def fd_refine(A, B, C, D, G, z, *, var=None, estimate_d=True, max_iter=100, warp
             blocks.append(JD)
         J = np.concatenate(blocks, axis=3) * w[:, None, None, None]
         J = J.reshape(K * p * m, -1)
-        E = E.ravel()
-        return np.concatenate([E.real, E.imag]), np.concatenate([J.real, J.imag])
+        return e, np.concatenate([J.real, J.imag])
 
     def residual(theta):
         if radius is not None and not inside(_unpack(theta, n, m, p, estimate_d)[0]):
