@@ -12,6 +12,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from ..statespace.fitting import FitSettings, simulation_objectives
 from ..statespace.model_base import DivergenceError
+from ..statespace.scaled import normalised_linear_start
 from ..utils.handover import detach_stage
 from ..utils.parameters import Interval, Options, validates_parameters
 from ..utils.validation import as_signal_list, check_period, validate_signals
@@ -87,6 +88,13 @@ class StateSpaceRegressorBase(SignalRegressorBase):
         self.n_params_ = self.model_.n_params
         self.n_nonlinear_params_ = self.model_.n_nonlinear_params
         return self
+
+    def _normalised_linear(self, linear, X_list, y_list):
+        """The fitted linear model ``linear`` (a BLAEstimator) normalised to
+        unit-rms inputs, outputs and states on the training signals (a
+        ScaledModel without monomials): where the nonlinear fits start."""
+        periods = [self.period_ if self._signal_is_periodic(U.shape[0]) else None for U in X_list]
+        return normalised_linear_start(linear.A_, linear.B_, linear.C_, linear.D_, X_list, y_list, periods)
 
     def _handed_period(self, stage):
         """``period``, or, when it is None, the period of the Pipeline stage

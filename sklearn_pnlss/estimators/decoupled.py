@@ -14,7 +14,6 @@ from ..decoupling.start import decoupled_start, random_branches_start
 from ..inspection import lm_fit_figures
 from ..statespace.fitting import optimise
 from ..statespace.model_base import DivergenceError
-from ..statespace.scaled import normalised_linear_start
 from ..utils.handover import attach_stage
 from ..utils.parameters import Interval, Options
 from ..utils.validation import restore_layout, validate_signals
@@ -224,9 +223,7 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
                     "model: leave start_model None (or use init='cpd')."
                 )
             self.start_model_ = self._linear_start(stage, X_list, y_list)
-            lin = self.start_model_
-            periods = [self.period_ if self._signal_is_periodic(U.shape[0]) else None for U in X_list]
-            return normalised_linear_start(lin.A_, lin.B_, lin.C_, lin.D_, X_list, y_list, periods)
+            return self._normalised_linear(self.start_model_, X_list, y_list)
         self.start_model_ = self._start_model(stage, X_list, y_list, val, weights)
         return self.start_model_.model_
 

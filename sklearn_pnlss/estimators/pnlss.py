@@ -11,7 +11,6 @@ from ..statespace.linear import is_stable
 from ..statespace.monomials import monomial_exponents
 from ..statespace.degree_growth import degree_stages, optimise_growing_degrees
 from ..statespace.model_base import DivergenceError
-from ..statespace.scaled import normalised_linear_start
 from ..utils.parameters import Interval, Options
 from ._statespace import FIT_PARAMETER_CONSTRAINTS, StateSpaceRegressorBase
 from .bla import BLAEstimator
@@ -310,9 +309,7 @@ class PNLSSRegressor(StateSpaceRegressorBase):
     def _normalised_start(self, X_list, y_list):
         """The linear start with unit-rms inputs, outputs and states, E = F = 0.
         High-degree monomials of order-one variables stay well conditioned."""
-        lin = self.linear_model_
-        periods = [self.period_ if self._signal_is_periodic(U.shape[0]) else None for U in X_list]
-        start = normalised_linear_start(lin.A_, lin.B_, lin.C_, lin.D_, X_list, y_list, periods)
+        start = self._normalised_linear(self.linear_model_, X_list, y_list)
         linear = start.normalised
         n, p = linear.A.shape[0], linear.C.shape[0]
         exE, exF = self._exponents(n, linear.B.shape[1])
