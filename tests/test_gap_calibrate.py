@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.optimize import least_squares
 
-from sklearn_pnlss.gap.fitting.calibrate import (_refit_without_outliers, _solve, effect_model, fit_effect,
+from sklearn_pnlss.gap.fitting.calibrate import (_Objective, _refit_without_outliers, _solve, effect_model, fit_effect,
                                                  meaningful_ftol, outlying_signals, parameter_covariance,
                                                  per_signal_mse, per_signal_sensitivity, stalled_near_noise,
                                                  with_recalibration)
@@ -45,6 +45,27 @@ def test_cubic_stiffness_is_recovered(train):
     osc, transform, physical = effect_model(fit.effect, fit.theta, NOMINAL, _scales(train, y))
     assert transform is None and physical == fit.physical
     assert osc.forces == (CubicStiffness(fit.physical["k3"]),)
+
+
+@pytest.mark.parametrize("name", ["hysteresis", "second_mode", "backlash", "input_delay"])
+def test_jacobian_from_sensitivities_equals_differences(train, name):
+    """The fit's Jacobian from one simulation with the integrator's
+    sensitivities (the nominal refitted too, offsets granted) against
+    forward differences of whole simulations, one per parameter; a delay
+    acts through the input and is differenced either way."""
+    y = simulate_signals(NOMINAL.with_forces([BoucWen(1e4, 300.0, 0.8, -1.1, 1.0)]), train)
+    recal = make_effect("recalibration")
+    effect = with_recalibration(make_effect(name), recal)
+    obj = _Objective(effect, NOMINAL, _scales(train, y), train, y, offsets=True)
+    lower, upper = effect.bounds
+    theta = np.clip(effect.starts[0] + 0.05, lower, upper)
+    r0 = obj(theta)
+    before = obj.n_evaluations
+    exact = obj.jacobian(theta, r0, lower, upper)
+    assert obj.n_evaluations - before == 1 + (name == "input_delay")  # one simulation (and the delay's)
+    differences = obj._difference_jacobian(theta, r0, lower, upper)
+    for i in range(theta.size):
+        assert np.linalg.norm(exact[:, i] - differences[:, i]) <= 1e-3 * np.linalg.norm(differences[:, i]) + 1e-12
 
 
 def test_cubic_stiffness_with_noise(train):

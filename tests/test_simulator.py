@@ -355,6 +355,59 @@ def test_slow_steady_state_is_shot_not_waited_for():
     np.testing.assert_allclose(per.z, rest.z[-u_fine.size:], rtol=0, atol=1e-8 * np.abs(per.z).max())
 
 
+SENSITIVITY_ELEMENTS = {
+    "linear": (),
+    "cubic": (CubicStiffness(1e8),),
+    "quadratic": (QuadraticStiffness(1.5e6),),
+    "bouc_wen": (BoucWen(1e4, 300.0, 0.8, -1.1, 1.3),),
+    "coulomb": (CoulombFriction(1.0, 2e-3),),
+    "quadratic_damping": (QuadraticDamping(15.0),),
+    "dead_zone": (DeadZoneSpring(1e4, 1.5e-3),),
+    "coupled_mass": (CoupledMass(0.2, 15.0, 0.2 * (2 * np.pi * 60) ** 2),),
+}
+
+
+@pytest.mark.parametrize("periodic", [False, True])
+@pytest.mark.parametrize("name", sorted(SENSITIVITY_ELEMENTS))
+def test_sensitivities_are_the_derivatives_of_the_simulation(name, periodic):
+    """The integrator's sensitivity recursion against central differences of
+    whole simulations, by every physical parameter; periodic: the steady
+    state's own derivative through the period map (the orbit moves too)."""
+    forces = SENSITIVITY_ELEMENTS[name]
+    n, fs = 256, 3750.0
+    u_fine = upsample_fft(5 * _few_line_signal(n, np.arange(2, 40)), 5, periodic=True)  # 50 N rms
+    osc = Oscillator(2.0, 10.0, 5e4, forces=forces)
+
+    def simulate(p):
+        moved = Oscillator(p[0], p[1], p[2], forces=forces)
+        moved._packed[2][:] = p[3:]
+        if periodic:
+            return moved.simulate_fine(u_fine, fs=fs, periodic=True, tol=1e-14, max_periods=300, warn=False).y
+        return moved.simulate_fine(u_fine, fs=fs, periodic=False).y
+
+    steady = osc.simulate_fine(u_fine, fs=fs, periodic=True, tol=1e-14, max_periods=300).final_state
+    y, dy = osc.sensitivity(u_fine, fs=fs, periodic=periodic, steady_state=steady if periodic else None)
+    np.testing.assert_allclose(y, simulate(osc.parameter_vector), rtol=0, atol=1e-9 * np.abs(y).max())
+    p0 = osc.parameter_vector
+    for i in range(p0.size):
+        step = 1e-6 * abs(p0[i])
+        up, down = p0.copy(), p0.copy()
+        up[i] += step
+        down[i] -= step
+        fd = (simulate(up) - simulate(down)) / (2 * step)
+        # the corner scales of the smoothed elements (a friction's velocity
+        # scale, a dead zone's smoothing) are the parameters whose central
+        # differences are themselves only good to about 1e-4
+        tol = 1e-3 if (name, i) in (("coulomb", 4), ("dead_zone", 5)) else 1e-4
+        assert np.linalg.norm(dy[:, i] - fd) <= tol * np.linalg.norm(fd), (name, i)
+
+
+def test_sensitivity_refuses_what_it_cannot_differentiate():
+    osc = Oscillator(2.0, 10.0, 5e4, forces=(StiffnessDrift(-1.0),))
+    with pytest.raises(ValueError, match="time-invariant"):
+        osc.sensitivity(np.ones(64), fs=1000.0, periodic=True, steady_state=np.zeros(5))
+
+
 def test_noise_is_band_limited_and_shaped_by_decimation():
     osc = Oscillator(M, C, K)
     u = _few_line_signal(8192, np.arange(55, 1639))

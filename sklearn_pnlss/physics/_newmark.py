@@ -212,6 +212,64 @@ def _rate(kind, p, o, y, yd, z, a, b, g, dgdy, dgdyd, dgdz):
             g[j] = np.nan
 
 
+# --------------------------------------------------------------------------
+# Parameter derivatives (the sensitivity recursion of ``newmark_run``):
+# ``_dparams`` fills dF/dp at ``dfdp[o:end]`` and dg/dp at ``dgdp[a:b, o:end]``
+# for the element's parameters ``p[o:end]``; an element without them
+# (a user's function) writes NaN, and its oscillator is differenced instead.
+# --------------------------------------------------------------------------
+@njit(**_INLINE)
+def _dparams(kind, p, o, end, y, yd, z, a, b, dfdp, dgdp):
+    for i in range(o, end):
+        dfdp[i] = 0.0
+        for j in range(a, b):
+            dgdp[j, i] = 0.0
+    if kind == KIND_BOUC_WEN:
+        alpha, beta, gamma, delta, nu = p[o], p[o + 1], p[o + 2], p[o + 3], p[o + 4]
+        zz = z[a]
+        az = abs(zz)
+        pow_nu1 = 1.0 if nu == 1.0 else az ** (nu - 1.0)
+        pow_nu = pow_nu1 * az
+        ayd = abs(yd)
+        log_z = np.log(az) if az > 0.0 else 0.0
+        dgdp[a, o] = yd
+        dgdp[a, o + 1] = -(gamma * ayd * pow_nu1 * zz + delta * yd * pow_nu)
+        dgdp[a, o + 2] = -beta * ayd * pow_nu1 * zz
+        dgdp[a, o + 3] = -beta * yd * pow_nu
+        dgdp[a, o + 4] = -beta * (gamma * ayd * pow_nu1 * zz + delta * yd * pow_nu) * log_z
+    elif kind == KIND_CUBIC_STIFFNESS:
+        dfdp[o] = y * y * y
+    elif kind == KIND_QUADRATIC_STIFFNESS:
+        dfdp[o] = y * y
+    elif kind == KIND_COULOMB_FRICTION:
+        t = np.tanh(yd / p[o + 1])
+        dfdp[o] = t
+        dfdp[o + 1] = -p[o] * (1.0 - t * t) * yd / (p[o + 1] * p[o + 1])
+    elif kind == KIND_QUADRATIC_DAMPING:
+        dfdp[o] = yd * abs(yd)
+    elif kind == KIND_DEAD_ZONE_SPRING:
+        kb, gap, s = p[o], p[o + 1], p[o + 2]
+        up, dup = _softplus(y - gap, s)
+        down, ddown = _softplus(-y - gap, s)
+        dfdp[o] = up - down
+        dfdp[o + 1] = kb * (ddown - dup)
+        # d/ds of s log(1 + exp(x / s)): (softplus - x sigmoid) / s
+        dfdp[o + 2] = kb * ((up - (y - gap) * dup) - (down - (-y - gap) * ddown)) / s
+    elif kind == KIND_COUPLED_MASS:
+        m2, c2, k2 = p[o], p[o + 1], p[o + 2]
+        stretch, rate = y - z[a], yd - z[a + 1]
+        dfdp[o + 1] = rate
+        dfdp[o + 2] = stretch
+        dgdp[a + 1, o] = -(k2 * stretch + c2 * rate) / (m2 * m2)
+        dgdp[a + 1, o + 1] = rate / m2
+        dgdp[a + 1, o + 2] = stretch / m2
+    elif kind == KIND_STIFFNESS_DRIFT:
+        dfdp[o] = z[a] * y
+    else:
+        for i in range(o, end):
+            dfdp[i] = np.nan
+
+
 _CUSTOM_KERNELS = {}
 
 
@@ -246,7 +304,8 @@ def integrator_kernels(functions=()):
         namespace = dict(globals(), custom_force=custom_dispatcher(functions))
         # numba reads a kernel's globals when it compiles, so every copy,
         # made in the shared namespace, calls the other copies.
-        for name in ("_force", "_total_force_and_rates", "newmark_run", "stateless_forces"):
+        for name in ("_force", "_total_force_and_rates", "_element_derivatives", "_initial_tangents",
+                     "_tangent_step", "newmark_run", "stateless_forces"):
             py = globals()[name].py_func
             namespace[name] = njit(nogil=True)(types.FunctionType(py.__code__, namespace, py.__name__))
         # Keep the functions alive with the key so their ids are never reused.
@@ -319,18 +378,148 @@ def _total_force_and_rates(kinds, p_off, params, z_off, y, yd, z, zd, dfdz, dgdy
     return total
 
 
+@njit(**_INLINE)
+def _element_derivatives(kinds, p_off, params, z_off, y, yd, z, dfdz, g, dgdy, dgdyd, dgdz, dfdp, dgdp):
+    """Every element's derivatives at (y, yd, z): ``(dF/dy, dF/dyd)`` summed
+    over the elements; fills dF/dz, the rates g and their derivatives, and
+    the parameter derivatives (see ``_dparams``)."""
+    fy = 0.0
+    fyd = 0.0
+    for e in range(kinds.shape[0]):
+        a, b = z_off[e], z_off[e + 1]
+        _, dfdy_e, dfdyd_e = _force(kinds[e], params, p_off[e], p_off[e + 1], y, yd, z, a, dfdz)
+        fy += dfdy_e
+        fyd += dfdyd_e
+        if b > a:
+            _rate(kinds[e], params, p_off[e], y, yd, z, a, b, g, dgdy, dgdyd, dgdz)
+        _dparams(kinds[e], params, p_off[e], p_off[e + 1], y, yd, z, a, b, dfdp, dgdp)
+    return fy, fyd
+
+
+@njit(**_INLINE)
+def _parameter_term(pi, ydd, yd, y, dfdp):
+    """Explicit derivative of the equation of motion's residual by the
+    physical parameter ``pi`` (0, 1, 2: mass, damping, stiffness; 3 + i:
+    the elements' ``params[i]``; -1: none, a direction of the state)."""
+    if pi == 0:
+        return ydd
+    if pi == 1:
+        return yd
+    if pi == 2:
+        return y
+    if pi >= 3:
+        return dfdp[pi - 3]
+    return 0.0
+
+
+@njit(**_INLINE)
+def _initial_tangents(tangents, param_of, u0, y, yd, z, m, c, k, kinds, p_off, params, z_off,
+                      dfdz, g, dgdy, dgdyd, dgdz, dfdp, dgdp):
+    """The acceleration's and the rates' sensitivities at a start in
+    equilibrium (``init_accel``), from those of (y, yd, z)."""
+    nz = z.shape[0]
+    fy, fyd = _element_derivatives(kinds, p_off, params, z_off, y, yd, z, dfdz, g, dgdy, dgdyd, dgdz, dfdp, dgdp)
+    total = 0.0
+    for e in range(kinds.shape[0]):
+        f, _, _ = _force(kinds[e], params, p_off[e], p_off[e + 1], y, yd, z, z_off[e], dfdz)
+        total += f
+    ydd = (u0 - c * yd - k * y - total) / m
+    for d in range(tangents.shape[0]):
+        s = tangents[d]
+        pi = param_of[d]
+        moved = (c + fyd) * s[STATE_YD] + (k + fy) * s[STATE_Y] + _parameter_term(pi, ydd, yd, y, dfdp)
+        for j in range(nz):
+            moved += dfdz[j] * s[STATE_Z + j]
+        s[STATE_YDD] = -moved / m
+        for j in range(nz):
+            rate = dgdy[j] * s[STATE_Y] + dgdyd[j] * s[STATE_YD]
+            for col in range(nz):
+                rate += dgdz[j, col] * s[STATE_Z + col]
+            if pi >= 3:
+                rate += dgdp[j, pi - 3]
+            s[STATE_Z + nz + j] = rate
+
+
+@njit(**_INLINE)
+def _tangent_step(tangents, param_of, y1, yd1, ydd1, z1, h, m, c, k, kinds, p_off, params, z_off,
+                  dfdz, g, dgdy, dgdyd, dgdz, dfdp, dgdp, a_mat, a_work, x):
+    """Carry the sensitivities (``tangents``, a row per direction laid out
+    as the state) over the step that has just converged at (y1, z1): the
+    step's equations differentiated at their solution, one linear solve
+    with the Newton matrix per direction."""
+    nz = z1.shape[0]
+    n = 1 + nz
+    c_acc = 4.0 / (h * h)
+    c_vel = 2.0 / h
+    half_h = 0.5 * h
+    fy, fyd = _element_derivatives(kinds, p_off, params, z_off, y1, yd1, z1, dfdz, g, dgdy, dgdyd, dgdz,
+                                   dfdp, dgdp)
+    a_mat[0, 0] = m * c_acc + c * c_vel + k + fy + fyd * c_vel
+    for j in range(nz):
+        a_mat[0, 1 + j] = dfdz[j]
+        a_mat[1 + j, 0] = -half_h * (dgdy[j] + dgdyd[j] * c_vel)
+        for col in range(nz):
+            a_mat[1 + j, 1 + col] = -half_h * dgdz[j, col]
+        a_mat[1 + j, 1 + j] += 1.0
+    for d in range(tangents.shape[0]):
+        s = tangents[d]
+        pi = param_of[d]
+        # the parts of yd1's and ydd1's sensitivities set by the last state
+        dyd_last = -c_vel * s[STATE_Y] - s[STATE_YD]
+        dydd_last = -c_acc * (s[STATE_Y] + h * s[STATE_YD]) - s[STATE_YDD]
+        x[0] = -(m * dydd_last + (c + fyd) * dyd_last + _parameter_term(pi, ydd1, yd1, y1, dfdp))
+        for j in range(nz):
+            x[1 + j] = s[STATE_Z + j] + half_h * (s[STATE_Z + nz + j] + dgdyd[j] * dyd_last)
+            if pi >= 3:
+                x[1 + j] += half_h * dgdp[j, pi - 3]
+        if n == 1:
+            x[0] /= a_mat[0, 0]
+        else:
+            for r in range(n):
+                for col in range(n):
+                    a_work[r, col] = a_mat[r, col]
+            if n == 2:
+                _solve2_inplace(a_work, x)
+            else:
+                _solve_inplace(a_work, x, n)
+        dy1 = x[0]
+        dyd1 = c_vel * dy1 + dyd_last
+        s[STATE_Y] = dy1
+        s[STATE_YD] = dyd1
+        s[STATE_YDD] = c_acc * dy1 + dydd_last
+        for j in range(nz):
+            s[STATE_Z + j] = x[1 + j]
+        for j in range(nz):
+            rate = dgdy[j] * dy1 + dgdyd[j] * dyd1
+            for col in range(nz):
+                rate += dgdz[j, col] * x[1 + col]
+            if pi >= 3:
+                rate += dgdp[j, pi - 3]
+            s[STATE_Z + nz + j] = rate
+
+
 # --------------------------------------------------------------------------
 # Integrator
 # --------------------------------------------------------------------------
 @njit(**_JIT)
 def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
-                init_accel, y_out, yd_out, z_out, rtol, max_iter):
+                init_accel, y_out, yd_out, z_out, rtol, max_iter, tangents, param_of, dy_out):
     """Integrate ``n_steps`` steps of length ``h`` from ``state`` (updated in place).
 
     Step ``i`` goes from time ``i h`` to ``(i + 1) h`` with input
     ``u[(i + 1) % len(u)]`` (so a periodic input of one period can be run
     period after period).  Sample ``i`` of the outputs is the state at time
     ``i h`` (only the first ``len(y_out)`` samples are stored).
+
+    Sensitivities (none when ``tangents`` has no rows): each row of
+    ``tangents`` is the derivative of the state (same layout) along one
+    direction, updated in place; ``param_of`` says which physical parameter
+    the direction moves (0, 1, 2: mass, damping, stiffness; ``3 + i``:
+    ``params[i]``; -1: none, a direction of the initial state), and
+    ``dy_out[i, d]`` receives the displacement's derivative at sample ``i``.
+    They are the exact derivatives of the discrete scheme (its equations
+    differentiated at each converged step), so a fit's Jacobian costs one
+    simulation instead of one per parameter.
 
     Returns
     -------
@@ -360,12 +549,22 @@ def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
     dgdyd = np.zeros(nz)
     dgdz = np.zeros((nz, nz))
     zq = np.zeros(nz)  # the states of the Newton iterate q
+    n_dir = tangents.shape[0]
+    n_dy = dy_out.shape[0]
+    dfdp = np.zeros(params.shape[0])
+    dgdp = np.zeros((nz, params.shape[0]))
+    a_mat = np.zeros((n, n))
+    a_work = np.zeros((n, n))
+    x = np.zeros(n)
 
     if init_accel:
         # Start from equilibrium of the equation of motion at t = 0.
         ftot = _total_force_and_rates(kinds, p_off, params, z_off, y, yd, z, zd,
                                       dfdz, dgdy, dgdyd, dgdz)
         ydd = (u[0] - c * yd - k * y - ftot) / m
+        if n_dir > 0:
+            _initial_tangents(tangents, param_of, u[0], y, yd, z, m, c, k, kinds, p_off, params, z_off,
+                              dfdz, g, dgdy, dgdyd, dgdz, dfdp, dgdp)
 
     peak[0] = abs(y)
     for j in range(nz):
@@ -383,6 +582,9 @@ def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
             yd_out[i] = yd
             for j in range(nz):
                 z_out[i, j] = z[j]
+        if i < n_dy:
+            for d in range(n_dir):
+                dy_out[i, d] = tangents[d, STATE_Y]
         if i == n_steps:
             break
         u1 = u[(i + 1) % n_u]
@@ -452,6 +654,9 @@ def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
         yd = yd1
         for j in range(nz):
             z[j] = q[1 + j]
+        if n_dir > 0:
+            _tangent_step(tangents, param_of, y, yd, ydd, z, h, m, c, k, kinds, p_off, params, z_off,
+                          dfdz, g, dgdy, dgdyd, dgdz, dfdp, dgdp, a_mat, a_work, x)
         if nz > 0:
             # Rates at the converged point, as the next step's trapezoid needs.
             _total_force_and_rates(kinds, p_off, params, z_off, y, yd, z, zd,

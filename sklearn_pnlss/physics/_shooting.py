@@ -8,7 +8,10 @@ sends the positions ``p = (y, yd, z)`` at a period's start to those at its
 end: Newton's method on ``G(p) = F(p) - p`` finds it in a few periods.  The
 Jacobian comes from forward differences once (one period per position) and
 is then kept up to date by Broyden's rank-one updates from the periods that
-are simulated anyway, so every later period is also a Newton step.  The
+are simulated anyway, so every later period is also a Newton step.  Where
+the integrator gives it, the Jacobian is exact instead, from one period run
+with its sensitivity recursion (one period for all positions, where
+differences take one per position).  The
 caller still checks each period against its start, so the answer is the
 same steady state as without shooting; and a step is taken only while the
 map contracts (its Jacobian's eigenvalues inside the unit circle), so that
@@ -39,10 +42,16 @@ class PeriodShooter:
         Length of the integrator state.
     n_internal : int
         Internal states of the force elements.
+    period_jacobian : callable, default=None
+        ``period_jacobian(state, idx)``: derivatives of the positions
+        ``idx`` at the period's end by those at its start (the rates
+        recomputed from the equation of motion), from ``state``; None:
+        forward differences.
     """
 
-    def __init__(self, run_period, n_states, n_internal):
+    def __init__(self, run_period, n_states, n_internal, period_jacobian=None):
         self.run_period = run_period
+        self.period_jacobian = period_jacobian
         self.n_states = n_states
         self.idx = np.r_[STATE_Y, STATE_YD, STATE_Z:STATE_Z + n_internal]
         self.jac = None  # Jacobian of G(p) = F(p) - p
@@ -57,6 +66,8 @@ class PeriodShooter:
     def _jacobian(self, p, f, scale, budget):
         """Forward-difference Jacobian of ``G`` at ``p`` (``f = F(p)``),
         steps relative to each position's peak ``scale``."""
+        if self.period_jacobian is not None:
+            return self.period_jacobian(self._state(p), self.idx) - np.eye(self.idx.size)
         if self.idx.size > budget:
             return None
         jac = np.empty((self.idx.size, self.idx.size))
@@ -89,7 +100,7 @@ class PeriodShooter:
         try:
             if self.jac is None:
                 self.jac = self._jacobian(p, f, scale, budget)
-                used = self.idx.size
+                used = 1 if self.period_jacobian is not None else self.idx.size
                 if self.jac is None:
                     self.active = False
                     return None, 0

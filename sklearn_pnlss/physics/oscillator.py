@@ -10,7 +10,7 @@ from sklearn.utils import check_random_state
 
 from ._newmark import STATE_Z, integrator_kernels
 from ._shooting import PeriodShooter
-from .forces import pack_forces
+from .forces import KIND_CUSTOM, pack_forces
 from .resampling import check_factors, check_signal, decimate_fir, upsample_fft
 
 # STATE_Z is public: the index of the first internal state in an integrator
@@ -26,6 +26,9 @@ _NEWTON_MAX_ITER = 60
 # Periods simulated plainly before (and between) Newton steps on the
 # periodic steady state: a well-damped structure settles before.
 _SHOOT_AFTER = 3
+# Sensitivity arguments of a plain run: no directions.
+_NO_TANGENTS = np.zeros((0, 0))
+_NO_PARAMS = np.zeros(0, dtype=np.int64)
 
 
 @dataclass
@@ -239,7 +242,7 @@ class Oscillator:
         n_failed, _ = self._newmark_run(
             u_fine, n_steps, h, self.mass, self.damping, self.stiffness,
             kinds, p_off, params, z_off, state, init_accel, y, yd, z,
-            _NEWTON_RTOL, _NEWTON_MAX_ITER,
+            _NEWTON_RTOL, _NEWTON_MAX_ITER, _NO_TANGENTS, _NO_PARAMS, _NO_TANGENTS,
         )
         if not (np.all(np.isfinite(y)) and np.all(np.isfinite(state))):
             raise FloatingPointError(
@@ -334,7 +337,9 @@ class Oscillator:
         # After a few unsettled periods, Newton steps on the period map (see
         # _shooting): a slowly decaying structure needs a handful of
         # periods instead of hundreds.
-        shooter = PeriodShooter(lambda st, ini: self._run(u_fine, n, h, st, ini, n)[:3], state.size, nz)
+        exact = None if np.any(self._packed[0] == KIND_CUSTOM) else (
+            lambda st, idx: self._period_jacobian(u_fine, n, h, st, idx))
+        shooter = PeriodShooter(lambda st, ini: self._run(u_fine, n, h, st, ini, n)[:3], state.size, nz, exact)
         period, resume, plain = 0, None, []
         while period < max_periods:
             start = state.copy()
@@ -372,6 +377,101 @@ class Oscillator:
                 stacklevel=2,
             )
         return FineSimulation(np.arange(n) * h, u_fine, y, yd, z, fs, period, total_failed, state)
+
+    @property
+    def parameter_vector(self):
+        """The physical parameters :meth:`sensitivity` differentiates by:
+        mass, damping, stiffness, then each force element's parameters in
+        the order of ``forces`` (each element's ``params``)."""
+        return np.concatenate([[self.mass, self.damping, self.stiffness], self._packed[2]])
+
+    def sensitivity(self, u_fine, *, fs, periodic, steady_state=None):
+        """Displacement and its exact derivatives by every physical parameter.
+
+        The derivatives are those of the integration scheme itself: each
+        converged step's equations are differentiated and solved with its
+        Newton matrix, along with the simulation (one run instead of one
+        per parameter).  A periodic steady state moves with the parameters
+        too: the period is run once more with the initial state's
+        directions as well, and the orbit's own derivative solved from the
+        period map, ``(I - Phi) s_0 = b``.
+
+        Parameters
+        ----------
+        u_fine : array-like of shape (n_samples,)
+            Input force at the integration rate.
+        fs : float
+            Integration rate, Hz.
+        periodic : bool
+            False: from rest at ``t = 0``.  True: ``u_fine`` is one period
+            and ``steady_state`` the ``final_state`` of a periodic
+            :meth:`simulate_fine` of it that reached its steady state.
+        steady_state : ndarray, default=None
+            Required with ``periodic``.
+
+        Returns
+        -------
+        y : ndarray of shape (n_samples,)
+        dy : ndarray of shape (n_samples, n_parameters)
+            Derivatives by :attr:`parameter_vector`.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from sklearn_pnlss.physics import Oscillator, CubicStiffness
+        >>> osc = Oscillator(2.0, 10.0, 5e4, forces=(CubicStiffness(1e8),))
+        >>> u = 50.0 * np.sin(2 * np.pi * np.arange(3000) / 3000 * 40)
+        >>> y, dy = osc.sensitivity(u, fs=15000.0, periodic=False)
+        >>> dy.shape
+        (3000, 4)
+        """
+        u_fine = check_signal(u_fine, "u_fine")
+        fs = _positive_real("fs", fs)
+        kinds = self._packed[0]
+        if np.any(kinds == KIND_CUSTOM):
+            raise ValueError("sensitivity needs the built-in force elements; an oscillator with a user's "
+                             "element is differenced instead.")
+        n, nz = u_fine.size, self.n_internal_states
+        n_state, n_params = STATE_Z + 2 * nz, 3 + self._packed[2].size
+        if not periodic:
+            tangents = np.zeros((n_params, n_state))
+            y, dy = self._run_tangents(u_fine, n - 1, 1.0 / fs, np.zeros(n_state), True, n, tangents,
+                                       np.arange(n_params))
+            return y, dy
+        if self.time_varying or steady_state is None:
+            raise ValueError("a periodic sensitivity needs a time-invariant oscillator and the steady_state "
+                             "of a converged periodic simulate_fine.")
+        # Directions: each of the initial state's (the period map's Jacobian
+        # Phi), then each parameter's from the same start (b).
+        tangents = np.zeros((n_state + n_params, n_state))
+        tangents[:n_state] = np.eye(n_state)
+        param_of = np.concatenate([np.full(n_state, -1), np.arange(n_params)])
+        y, dy = self._run_tangents(u_fine, n, 1.0 / fs, np.array(steady_state, float), False, n, tangents,
+                                   param_of)
+        phi, b = tangents[:n_state].T, tangents[n_state:].T
+        start = np.linalg.solve(np.eye(n_state) - phi, b)
+        return y, dy[:, n_state:] + dy[:, :n_state] @ start
+
+    def _period_jacobian(self, u_fine, n, h, state, idx):
+        """Derivatives of the positions ``idx`` of the state after one
+        period from ``state`` by the same positions at its start (the
+        acceleration and the rates recomputed from the equation of motion,
+        as a shot is started)."""
+        tangents = np.zeros((idx.size, state.size))
+        tangents[np.arange(idx.size), idx] = 1.0
+        self._run_tangents(u_fine, n, h, state.copy(), True, 0, tangents, np.full(idx.size, -1))
+        return tangents[:, idx].T
+
+    def _run_tangents(self, u_fine, n_steps, h, state, init_accel, n_out, tangents, param_of):
+        kinds, p_off, params, z_off, _ = self._packed
+        y = np.empty(n_out)
+        dy = np.empty((n_out, tangents.shape[0]))
+        self._newmark_run(u_fine, n_steps, h, self.mass, self.damping, self.stiffness, kinds, p_off, params,
+                          z_off, state, init_accel, y, np.empty(n_out), np.empty((n_out, self.n_internal_states)),
+                          _NEWTON_RTOL, _NEWTON_MAX_ITER, tangents, param_of.astype(np.int64), dy)
+        if not (np.all(np.isfinite(y)) and np.all(np.isfinite(dy))):
+            raise FloatingPointError("the simulation or its sensitivities diverged (non-finite state).")
+        return y, dy
 
     @staticmethod
     def _change(start, end, y, yd, z):

@@ -14,7 +14,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from ..candidates.effects import Effect
-from .simulate import FIT_MAX_PERIODS, misfit, simulate_signals
+from .simulate import FIT_MAX_PERIODS, misfit, simulate_sensitivities, simulate_signals
 
 __all__ = ["EffectFit", "with_recalibration", "with_delay", "meaningful_ftol", "fit_effect", "effect_model",
            "parameter_covariance"]
@@ -31,6 +31,10 @@ FINE_MISMATCH = 2.0
 DEFECT_ROUNDS = 3
 #: Data starts (the best at the coarse rate) tried again at the reporting rate.
 FINE_DATA_STARTS = 3
+#: Data starts kept (the best on the first training signal) for a full
+#: evaluation when an effect lists more: a profile gives dozens, each a
+#: simulation of every signal, and on one signal they rank alike.
+SCREENED_STARTS = 4
 #: A training signal whose misfit is this many times the median signal's
 #: (10 dB) has jumped to another steady state, one whose sensitivity is that
 #: many times makes the misfit a needle (see :func:`_refit_without_outliers`).
@@ -170,15 +174,20 @@ class _Objective:
         # (a hysteresis trial point running away to metres otherwise
         # integrates every period allowed, most of a fit's time).
         self.max_abs = 2 * _PENALTY * scales.displacement + max(np.max(np.abs(y)) for y in y_meas)
+        # the steady states of the last point simulated: its Jacobian (the
+        # trust region asks at the point it has just accepted) starts there
+        self._steady = (None, None)
 
     def __call__(self, theta):
         self.n_evaluations += 1
+        states = []
         try:
             osc, transform, _ = effect_model(self.effect, theta, self.nominal, self.scales)
             y_sim = simulate_signals(osc, self.signals, transform, max_periods=FIT_MAX_PERIODS,
-                                     max_abs=self.max_abs)
+                                     max_abs=self.max_abs, steady_states=states)
         except (ValueError, FloatingPointError, ZeroDivisionError):
             return np.full(self.size, _PENALTY)
+        self._steady = (np.asarray(theta, float).tobytes(), states)
         r = np.concatenate([misfit(ys, ym, self.offsets) for ys, ym in zip(y_sim, self.y_meas)])
         r /= self.scales.displacement
         if not np.all(np.isfinite(r)) or np.max(np.abs(r)) > _PENALTY:
@@ -191,15 +200,73 @@ class _Objective:
                           [self.y_meas[i] for i in index], self.offsets)
 
     def jacobian(self, theta, r0, lower, upper):
-        J = np.empty((r0.size, theta.size))
-        for i in range(theta.size):
-            step = _FD_STEP * max(1.0, abs(theta[i]))
-            if theta[i] + step > upper[i]:
-                step = -step  # stay inside the bounds
+        """Jacobian of the residuals at ``theta`` (``r0`` its residuals):
+        from the integrator's sensitivities where they apply, by forward
+        differences of the simulation otherwise."""
+        J = self._sensitivity_jacobian(theta, r0, lower, upper)
+        return self._difference_jacobian(theta, r0, lower, upper) if J is None else J
+
+    def _difference_jacobian(self, theta, r0, lower, upper, columns=None):
+        J = np.zeros((r0.size, theta.size))
+        for i in range(theta.size) if columns is None else columns:
+            step = _step(theta, i, upper)
             t = theta.copy()
             t[i] += step
             J[:, i] = (self(t) - r0) / step
         return J
+
+    def _sensitivity_jacobian(self, theta, r0, lower, upper):
+        """The Jacobian from one simulation with sensitivities: the
+        residuals' derivatives by the oscillator's physical parameters
+        (:func:`simulate_sensitivities`) times those parameters'
+        derivatives by ``theta`` (differences of the effect's build, no
+        simulation).  A parameter the oscillator does not see acts through
+        the input transform (a delay, a saturation level) and is differenced
+        by simulation.  None where the recursion does not apply."""
+        try:
+            osc, transform, _ = effect_model(self.effect, theta, self.nominal, self.scales)
+            physical = _physical_derivatives(self.effect, theta, osc, self.nominal, self.scales, lower, upper)
+            if physical is None or osc.time_varying:
+                return None
+            key, states = self._steady
+            _, dy = simulate_sensitivities(osc, self.signals, transform, max_periods=FIT_MAX_PERIODS,
+                                           max_abs=self.max_abs,
+                                           steady_states=states if key == np.asarray(theta, float).tobytes() else None)
+        except (ValueError, FloatingPointError, ZeroDivisionError):
+            return None
+        self.n_evaluations += 1
+        blocks = [d @ physical for d in dy]
+        if self.offsets:
+            blocks = [b - b.mean(axis=0) for b in blocks]
+        J = np.concatenate(blocks) / self.scales.displacement
+        through_input = [i for i in range(theta.size) if transform is not None and not np.any(physical[:, i])]
+        if through_input:
+            J[:, through_input] = self._difference_jacobian(theta, r0, lower, upper, through_input)[:, through_input]
+        return J
+
+
+def _step(theta, i, upper):
+    """Forward-difference step of parameter ``i``, backward at its upper bound."""
+    step = _FD_STEP * max(1.0, abs(theta[i]))
+    return -step if theta[i] + step > upper[i] else step
+
+
+def _physical_derivatives(effect, theta, osc, nominal, scales, lower, upper):
+    """Derivatives of the oscillator's physical parameters
+    (:attr:`~sklearn_pnlss.physics.Oscillator.parameter_vector`) by
+    ``theta``: differences of the effect's build, which costs no
+    simulation.  None when a step changes the oscillator's structure."""
+    base = osc.parameter_vector
+    out = np.empty((base.size, theta.size))
+    for i in range(theta.size):
+        step = _step(theta, i, upper)
+        t = theta.copy()
+        t[i] += step
+        moved = effect_model(effect, t, nominal, scales)[0].parameter_vector
+        if moved.size != base.size:
+            return None
+        out[:, i] = (moved - base) / step
+    return out
 
 
 def _solve(obj, theta0, lower, upper, max_nfev, ftol):
@@ -378,6 +445,22 @@ def _defect_corrected(obj, fine_signals, theta, lower, upper, max_nfev, ftol):
     return obj, theta, n_used, solved
 
 
+def _start_costs(obj, starts, n_listed):
+    """Training cost of each start: the ``n_listed`` listed starts and the
+    ``SCREENED_STARTS`` data starts best on the first training signal are
+    evaluated on all of them, the others get infinity."""
+    n_signals = len(obj.y_meas)
+    if len(starts) - n_listed <= SCREENED_STARTS or n_signals < 2:
+        return np.array([np.sum(obj(s) ** 2) for s in starts])
+    screen = obj.subset([0])
+    first = [np.sum(screen(s) ** 2) for s in starts[n_listed:]]
+    kept = list(range(n_listed)) + [n_listed + int(i) for i in np.argsort(first)[:SCREENED_STARTS]]
+    costs = np.full(len(starts), np.inf)
+    costs[kept] = [np.sum(obj(starts[i]) ** 2) for i in kept]
+    obj.n_evaluations += -(-screen.n_evaluations // n_signals)  # in simulations of the whole set
+    return costs
+
+
 def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_signals=None, clues=None,
                ftol=1e-8, offsets=False, noise_variance=None):
     """Fit one effect by simulation error.
@@ -424,7 +507,7 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
     lower, upper = effect.bounds
     data_starts = effect.data_starts(clues, nominal, scales)
     starts = [np.clip(s, lower, upper) for s in effect.starts] + data_starts
-    costs = [np.sum(obj(s) ** 2) for s in starts]
+    costs = _start_costs(obj, starts, len(effect.starts))
     theta = starts[int(np.argmin(costs))]
     converged, message = True, "nothing to fit"
     if effect.n_params:

@@ -22,7 +22,8 @@ from ...physics.oscillator import STATE_Z, band_limited_noise
 from ...physics.resampling import decimate_fir, upsample_fft
 from ...utils.validation import is_periodic
 
-__all__ = ["SignalSet", "simulate_signals", "measured_starts", "prime_factors", "detect_period", "misfit"]
+__all__ = ["SignalSet", "simulate_signals", "simulate_sensitivities", "measured_starts", "prime_factors",
+           "detect_period", "misfit"]
 
 
 def misfit(y_sim, y_meas, offsets=False):
@@ -249,13 +250,15 @@ def _steady(osc, u_fine, fs_fine, max_periods=MAX_PERIODS, max_abs=None, start=N
 
 def _fine_response(osc, u_fine, P, fs_fine, transform, max_periods=MAX_PERIODS, max_abs=None, start=None,
                    record=False):
-    """Displacement at the integration rate over the whole signal, and
-    whether it is periodic (its decimation circular)."""
+    """Displacement at the integration rate over the whole signal, whether
+    it is periodic (its decimation circular), and the steady state it
+    repeats (the integrator's state at its period start; None for a
+    signal from rest or a time-varying oscillator)."""
     periodic = P > 0
     if transform is not None:
         u_fine = transform(u_fine, fs_fine, periodic)
     if not periodic:
-        return osc.simulate_fine(u_fine, fs=fs_fine, periodic=False, max_abs=max_abs).y, False
+        return osc.simulate_fine(u_fine, fs=fs_fine, periodic=False, max_abs=max_abs).y, False, None
     if not osc.time_varying:
         steady = _steady(osc, u_fine, fs_fine, max_periods, max_abs, start)
         if record:
@@ -264,15 +267,15 @@ def _fine_response(osc, u_fine, P, fs_fine, transform, max_periods=MAX_PERIODS, 
             # period more says whether the record is periodic
             y = osc.simulate_fine(np.tile(u_fine, P + 1), fs=fs_fine, periodic=False,
                                   initial_state=steady.final_state, max_abs=max_abs).y
-            return y[:-u_fine.size], _repeats(y, P + 1)
-        return np.tile(steady.y, P), True
+            return y[:-u_fine.size], _repeats(y, P + 1), None
+        return np.tile(steady.y, P), True, steady.final_state
     start = _steady(_frozen(osc), u_fine, fs_fine, max_periods, max_abs, start).final_state
     return osc.simulate_fine(np.tile(u_fine, P), fs=fs_fine, periodic=False,
-                             initial_state=_continuation_state(osc, start), max_abs=max_abs).y, False
+                             initial_state=_continuation_state(osc, start), max_abs=max_abs).y, False, None
 
 
 def simulate_signals(osc, signals, transform=None, *, noise_rms=0.0, random_state=None,
-                     max_periods=MAX_PERIODS, max_abs=None, record=False):
+                     max_periods=MAX_PERIODS, max_abs=None, record=False, steady_states=None):
     """Simulate ``osc`` on every signal of a :class:`SignalSet`.
 
     Parameters
@@ -302,6 +305,10 @@ def simulate_signals(osc, signals, transform=None, *, noise_rms=0.0, random_stat
         settle (a chaotic response) gives periods that differ, where
         repeating the search's last period would give data that no
         structure produces.
+    steady_states : list, default=None
+        When a list, filled with each signal's steady state (the
+        integrator's state at its period start, None where there is none):
+        :func:`simulate_sensitivities` at the same parameters starts there.
 
     Returns
     -------
@@ -314,8 +321,10 @@ def simulate_signals(osc, signals, transform=None, *, noise_rms=0.0, random_stat
     out = []
     starts = signals.starts or [None] * len(signals.u_fine)
     for u_fine, P, start in zip(signals.u_fine, signals.n_periods, starts):
-        y_fine, circular = _fine_response(osc, u_fine, P, fs_fine, transform, max_periods, max_abs, start,
-                                          record)
+        y_fine, circular, steady = _fine_response(osc, u_fine, P, fs_fine, transform, max_periods, max_abs,
+                                                  start, record)
+        if steady_states is not None:
+            steady_states.append(steady)
         if noise_rms > 0:
             y_fine = y_fine + band_limited_noise(y_fine.size, fs=fs_fine, f_max=signals.fs / 2,
                                                  rms=noise_rms, random_state=rng)
@@ -325,3 +334,52 @@ def simulate_signals(osc, signals, transform=None, *, noise_rms=0.0, random_stat
     if signals.correction is not None:
         out = [y + c for y, c in zip(out, signals.correction)]
     return out
+
+
+def simulate_sensitivities(osc, signals, transform=None, *, max_periods=MAX_PERIODS, max_abs=None,
+                           steady_states=None):
+    """:func:`simulate_signals` with each signal's derivatives by the
+    oscillator's physical parameters (:attr:`Oscillator.parameter_vector`),
+    from the integrator's own sensitivity recursion (see
+    :meth:`Oscillator.sensitivity`): a Jacobian for the price of about two
+    simulations, where forward differences cost one per parameter.
+
+    A periodic signal's steady state is searched as in
+    :func:`simulate_signals` (or taken from ``steady_states``, those it
+    filled at the same parameters), then its period is run once more with
+    the sensitivities; the derivatives are decimated by the same filter as the
+    displacement (the added correction of a coarse set is a constant).
+    Raises ``ValueError`` for what the recursion does not cover (a
+    time-varying oscillator's periodic signal, a user's force element):
+    the caller differences instead.
+
+    Returns
+    -------
+    y : list of ndarray (n_samples_i,)
+    dy : list of ndarray (n_samples_i, n_parameters)
+    """
+    fs_fine = signals.fs * signals.oversampling
+    starts = signals.starts or [None] * len(signals.u_fine)
+    known = steady_states or [None] * len(signals.u_fine)
+    y_out, dy_out = [], []
+    for u_fine, P, start, state in zip(signals.u_fine, signals.n_periods, starts, known):
+        periodic = P > 0
+        if transform is not None:
+            u_fine = transform(u_fine, fs_fine, periodic)
+        if periodic:
+            if osc.time_varying:
+                raise ValueError("a time-varying oscillator has no periodic sensitivity.")
+            if state is None:
+                state = _steady(osc, u_fine, fs_fine, max_periods, max_abs, start).final_state
+            y, dy = osc.sensitivity(u_fine, fs=fs_fine, periodic=True, steady_state=state)
+            y, dy = np.tile(y, P), np.tile(dy, (P, 1))
+        else:
+            y, dy = osc.sensitivity(u_fine, fs=fs_fine, periodic=False)
+        if signals.oversampling > 1:
+            y = decimate_fir(y, signals.decimation, periodic=periodic)
+            dy = np.column_stack([decimate_fir(col, signals.decimation, periodic=periodic) for col in dy.T])
+        y_out.append(y)
+        dy_out.append(dy)
+    if signals.correction is not None:
+        y_out = [y + c for y, c in zip(y_out, signals.correction)]
+    return y_out, dy_out
