@@ -8,7 +8,7 @@ is not physical gets a large residual, so the trust region shrinks away from
 it; it is never returned.
 """
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -16,8 +16,8 @@ from scipy.optimize import least_squares
 from ..candidates.effects import Effect
 from .simulate import FIT_MAX_PERIODS, misfit, simulate_sensitivities, simulate_signals
 
-__all__ = ["EffectFit", "with_recalibration", "with_delay", "meaningful_ftol", "fit_effect", "effect_model",
-           "parameter_covariance"]
+__all__ = ["EffectFit", "with_recalibration", "with_delay", "meaningful_ftol", "fit_effect", "refine_fit", "at_rate",
+           "effect_model", "parameter_covariance"]
 
 # Residual given to a trial point that diverges or is not physical, relative
 # to the displacement scale: far above any real misfit.
@@ -63,6 +63,17 @@ class EffectFit:
     message : str
     seconds : float
         Wall time of the fit.
+    data_starts : list of ndarray
+        The data's starts that were best at the fitting rate: a refinement
+        at the reporting rate tries them again (see :func:`refine_fit`).
+    refined : bool
+        Whether the fit holds at the reporting rate (refined there, or
+        fitted there in the first place).
+    coarse_mse : float
+        Mean squared training error at the fitting rate, before any
+        refinement: candidates are compared with each other there (a
+        coarse set's correction of the nominal's discretisation error
+        leaves every candidate a like floor that a refined fit does not).
     """
 
     effect: object
@@ -73,6 +84,9 @@ class EffectFit:
     converged: bool
     message: str
     seconds: float = 0.0
+    data_starts: list = field(default_factory=list)
+    refined: bool = True
+    coarse_mse: float = None
 
 
 def _then(first, second):
@@ -509,12 +523,15 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
     starts = [np.clip(s, lower, upper) for s in effect.starts] + data_starts
     costs = _start_costs(obj, starts, len(effect.starts))
     theta = starts[int(np.argmin(costs))]
-    converged, message = True, "nothing to fit"
+    converged, message, cost = True, "nothing to fit", float(np.min(costs))
     if effect.n_params:
         theta, converged, message, cost = _solve(obj, theta, lower, upper, max_nfev, ftol)
         if cost > min(costs):  # never worse than the best start
-            theta = starts[int(np.argmin(costs))]
+            theta, cost = starts[int(np.argmin(costs))], float(np.min(costs))
+    coarse_mse = cost / obj.size * scales.displacement**2
     n_evaluations = obj.n_evaluations
+    best_data_starts = [data_starts[i] for i in np.argsort(costs[len(effect.starts):])[:FINE_DATA_STARTS]
+                        if np.isfinite(costs[len(effect.starts) + i])]
     if effect.n_params and fine_signals is not None and signals.correction is not None:
         obj, theta, n_used, solved = _defect_corrected(obj, fine_signals, theta, lower, upper, max_nfev, ftol)
         n_evaluations += n_used
@@ -524,8 +541,7 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
         # The data's own starts, read off the measured motion, hold at any
         # rate; the coarse optimum may not.  (The few best at the coarse
         # rate: a profile gives dozens.)
-        by_cost = np.argsort(costs[len(effect.starts):])[:FINE_DATA_STARTS]
-        fine_starts = [theta] + [data_starts[i] for i in by_cost]
+        fine_starts = [theta] + best_data_starts
         fine_costs = [np.sum(fine_obj(t) ** 2) for t in fine_starts]
         best = int(np.argmin(fine_costs))
         if best > 0 or fine_costs[0] > FINE_MISMATCH * coarse_cost:
@@ -549,4 +565,28 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
     mse = float(np.mean(r**2)) * scales.displacement**2
     _, _, physical = effect_model(effect, theta, nominal, scales)
     return EffectFit(effect, theta, physical, mse, n_evaluations, bool(converged), str(message),
-                     time.perf_counter() - start)
+                     time.perf_counter() - start, best_data_starts,
+                     refined=fine_signals is not None or signals.correction is None, coarse_mse=coarse_mse)
+
+
+def at_rate(fit, nominal, scales, signals, y_meas, offsets=False):
+    """``fit`` with its ``coarse_mse`` taken on ``signals`` (one
+    simulation): a fit made on another coarse set compared with those made
+    on this one."""
+    r = _Objective(fit.effect, nominal, scales, signals, y_meas, offsets)(fit.theta)
+    return replace(fit, coarse_mse=float(np.mean(r**2)) * scales.displacement**2)
+
+
+def refine_fit(fit, nominal, scales, signals, y_meas, *, fine_signals, clues=None, **kwargs):
+    """Carry a fit made at the fitting rate alone (:func:`fit_effect`
+    without ``fine_signals``) on to the reporting rate: from its optimum
+    and the data starts that were best there, with the model's own
+    discretisation error carried over and checked at the reporting rate,
+    as :func:`fit_effect` does in one go.  The simulations and the time
+    are those of both stages."""
+    best = np.array(fit.data_starts) if fit.data_starts else None
+    warm = replace(fit.effect, starts=[fit.theta], data_start=None if best is None else (lambda *_: best),
+                   joint_start=None)
+    more = fit_effect(warm, nominal, scales, signals, y_meas, fine_signals=fine_signals, clues=clues, **kwargs)
+    return replace(more, effect=fit.effect, n_evaluations=fit.n_evaluations + more.n_evaluations,
+                   seconds=fit.seconds + more.seconds, coarse_mse=fit.coarse_mse)
