@@ -20,7 +20,7 @@ from .fitting.black_box import branch_opinions, fit_black_box
 from .fitting.calibrate import (at_rate, effect_model, fit_effect, meaningful_ftol, parameter_covariance,
                                 refine_fit, with_delay, with_recalibration)
 from .candidates.clues import read_clues
-from .verdict.decision import decide
+from .verdict.decision import TIE_CLOSURE, decide
 from .candidates.effects import (NOMINAL_PARAMETERS, Scales, default_effects, delay_signal, make_effect,
                                  recalibration_effect)
 from .verdict.noise_floor import (UNSETTLED_RATIO, estimate_noise, non_excited_noise, repeated_input_noise,
@@ -420,7 +420,7 @@ class GapDiagnosis(BaseEstimator):
             # stiffness 5 % off left every candidate 7 dB above the noise).
             refit = min(self._nested_fits(effects, done), key=lambda f: f.train_mse)
             coarse = train.coarse(self.fit_oversampling,
-                                  effect_model(refit.effect, refit.theta, self.nominal, self.scales_)[0])
+                                  *effect_model(refit.effect, refit.theta, self.nominal, self.scales_)[:2])
             done = {name: at_rate(fit, self.nominal, self.scales_, coarse, y_list, self.offsets)
                     for name, fit in done.items()}
         tasks = {e.name: fit_task(e, clues, refine=False) for e in effects if e.name not in done}
@@ -551,18 +551,24 @@ class GapDiagnosis(BaseEstimator):
                 and (e.is_recalibration or (self.delay_ is not None and e.name == "input_delay"))]
 
     def _adds_to(self, fit, nested, n_samples):
-        """Whether ``fit`` explains significantly more of the training data
-        than ``nested``, the fit it contains: its cost lower by more than
-        the chi-square quantile of its extra parameters at the diagnosis'
-        ``significance``, in units of the noise (an F-test with the noise
-        known).  A candidate that does not may not beat the nominal's
-        refit, which the verdict prefers whenever it explains as much.
-        Without a nested fit or a noise floor, every candidate adds."""
+        """Whether ``fit`` explains more of the training data than
+        ``nested``, the fit it contains, by what the verdict could tell on
+        validation: its cost lower by more than the chi-square quantile of
+        its extra parameters at the diagnosis' ``significance``, in units of
+        the noise (an F-test with the noise known), and its error lower by
+        more than ``TIE_CLOSURE`` of the nominal's excess over the noise, in
+        dB (the verdict's own tie; far above the noise the first test
+        passes for any extra parameter).  A candidate that does not cannot
+        beat the nominal's refit, which the verdict prefers whenever it
+        explains as much.  Without a nested fit or a noise floor, every
+        candidate adds."""
         if nested is None or self.noise_ is None or fit is nested:
             return True
         extra = max(fit.effect.n_params - nested.effect.n_params, 1)
         gain = (nested.coarse_mse - fit.coarse_mse) * n_samples * self.noise_.dof_per_sample / self.noise_.variance
-        return gain > chi2.ppf(1 - self.significance, extra)
+        excess_db = self.train_gap_db_ - 10 * np.log10(self.noise_.variance)
+        gain_db = 10 * np.log10(nested.coarse_mse / fit.coarse_mse)
+        return bool(gain > chi2.ppf(1 - self.significance, extra) and gain_db > TIE_CLOSURE * excess_db)
 
     def _polish_leader(self, effects, done, fit_task, run):
         """Carry on the fit of the candidate with the lowest training error

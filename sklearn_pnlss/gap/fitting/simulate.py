@@ -138,7 +138,7 @@ class SignalSet:
         decimation = prime_factors(oversampling) if decimation is None else tuple(decimation)
         return cls(list(u_list), n_periods, period, float(fs), int(oversampling), decimation, starts)
 
-    def coarse(self, oversampling, nominal):
+    def coarse(self, oversampling, nominal, transform=None):
         """The same signals integrated at a lower rate, corrected by the
         nominal model's discretisation error.
 
@@ -147,14 +147,15 @@ class SignalSet:
         is the change of that error due to an effect, second order in the
         effect's size.  At 5 times the data rate the nominal Bouc-Wen error
         is -44 dB and the corrected one falls well below the noise, for a
-        fourth of the cost.
+        fourth of the cost.  ``transform``: the nominal's input transform
+        (a channel delay it is refitted with), if any.
         """
         if oversampling >= self.oversampling:
             return self
         out = SignalSet(self.u, self.n_periods, self.period, self.fs, int(oversampling),
                         prime_factors(oversampling), self.starts)
-        fine = simulate_signals(nominal, self)
-        out.correction = [f - c for f, c in zip(fine, simulate_signals(nominal, out))]
+        fine = simulate_signals(nominal, self, transform)
+        out.correction = [f - c for f, c in zip(fine, simulate_signals(nominal, out, transform))]
         return out
 
     def without_correction(self):
