@@ -13,13 +13,15 @@ above its resonance), the one the experiment settled on is an unknown of
 the experiment, not of the model: started from rest, the right model can
 settle on the other one, and no parameter change brings it back.
 """
+import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
 from sklearn.utils import check_random_state
 
 from ...physics.oscillator import STATE_Z, band_limited_noise
-from ...physics.resampling import decimate_fir, upsample_fft
+from ...physics.resampling import decimate_columns, decimate_fir, upsample_fft
 from ...utils.validation import is_periodic
 
 __all__ = ["SignalSet", "simulate_signals", "simulate_sensitivities", "measured_starts", "prime_factors",
@@ -275,6 +277,22 @@ def _fine_response(osc, u_fine, P, fs_fine, transform, max_periods=MAX_PERIODS, 
                              initial_state=_continuation_state(osc, start), max_abs=max_abs).y, False, None
 
 
+_POOL = []
+
+
+def _each_signal(func, *columns):
+    """``func`` on each signal (the zipped ``columns``), in parallel threads
+    (the integrator releases the GIL), results in order.  The signals of a
+    set are independent: a candidate fitted alone (the leader's refinement,
+    the last long fit of a pool) keeps every core busy."""
+    rows = list(zip(*columns))
+    if len(rows) < 2 or (os.cpu_count() or 1) < 2:
+        return [func(*row) for row in rows]
+    if not _POOL:
+        _POOL.append(ThreadPoolExecutor(max_workers=os.cpu_count(), thread_name_prefix="signals"))
+    return [f.result() for f in [_POOL[0].submit(func, *row) for row in rows]]
+
+
 def simulate_signals(osc, signals, transform=None, *, noise_rms=0.0, random_state=None,
                      max_periods=MAX_PERIODS, max_abs=None, record=False, steady_states=None):
     """Simulate ``osc`` on every signal of a :class:`SignalSet`.
@@ -321,9 +339,10 @@ def simulate_signals(osc, signals, transform=None, *, noise_rms=0.0, random_stat
     fs_fine = signals.fs * signals.oversampling
     out = []
     starts = signals.starts or [None] * len(signals.u_fine)
-    for u_fine, P, start in zip(signals.u_fine, signals.n_periods, starts):
-        y_fine, circular, steady = _fine_response(osc, u_fine, P, fs_fine, transform, max_periods, max_abs,
-                                                  start, record)
+    responses = _each_signal(lambda u_fine, P, start: _fine_response(
+        osc, u_fine, P, fs_fine, transform, max_periods, max_abs, start, record), signals.u_fine,
+        signals.n_periods, starts)
+    for y_fine, circular, steady in responses:
         if steady_states is not None:
             steady_states.append(steady)
         if noise_rms > 0:
@@ -363,7 +382,8 @@ def simulate_sensitivities(osc, signals, transform=None, *, max_periods=MAX_PERI
     starts = signals.starts or [None] * len(signals.u_fine)
     known = steady_states or [None] * len(signals.u_fine)
     y_out, dy_out = [], []
-    for u_fine, P, start, state in zip(signals.u_fine, signals.n_periods, starts, known):
+
+    def one(u_fine, P, start, state):
         periodic = P > 0
         if transform is not None:
             u_fine = transform(u_fine, fs_fine, periodic)
@@ -378,7 +398,10 @@ def simulate_sensitivities(osc, signals, transform=None, *, max_periods=MAX_PERI
             y, dy = osc.sensitivity(u_fine, fs=fs_fine, periodic=False)
         if signals.oversampling > 1:
             y = decimate_fir(y, signals.decimation, periodic=periodic)
-            dy = np.column_stack([decimate_fir(col, signals.decimation, periodic=periodic) for col in dy.T])
+            dy = decimate_columns(dy, signals.decimation, periodic=periodic)
+        return y, dy
+
+    for y, dy in _each_signal(one, signals.u_fine, signals.n_periods, starts, known):
         y_out.append(y)
         dy_out.append(dy)
     if signals.correction is not None:
