@@ -22,6 +22,7 @@ from sklearn_pnlss.physics import (
     fir_decimation_filter,
     upsample_fft,
 )
+from sklearn_pnlss.physics.resampling import decimate_columns
 from sklearn_pnlss.signals import bouc_wen_sweep, linear_chirp
 
 M, C, K = 2.0, 10.0, 5e4
@@ -84,6 +85,14 @@ def test_decimate_periodic_is_circular_and_matches_interior():
     gain = _zero_phase_gain(fir_decimation_filter(r), [17.0], n)[0]
     np.testing.assert_allclose(decimate_fir(tone, r, periodic=True), gain * tone[::r],
                                atol=1e-12)
+
+
+@pytest.mark.parametrize("periodic", [False, True])
+def test_decimating_columns_decimates_each_record(periodic):
+    x = np.random.RandomState(0).standard_normal((2000, 3))
+    out = decimate_columns(x, (2, 5), periodic=periodic)
+    for j in range(3):
+        np.testing.assert_allclose(out[:, j], decimate_fir(x[:, j], (2, 5), periodic=periodic), rtol=0, atol=1e-14)
 
 
 def test_decimate_errors():

@@ -106,7 +106,7 @@ def _decimate_once(x, r, periodic):
         front = 2.0 * x[0] - x[_FIR_ORDER + 1:0:-1]
         back = 2.0 * x[-1] - x[-2:-n_back - 2:-1]
         ext = np.concatenate([front, x, back])
-        first = front.size + _HALF
+        first = front.shape[0] + _HALF
     # MATLAB's filter(b, 1, ext) picked at first, first + r, ...: only the
     # kept samples are computed (each a window of ext times the reversed
     # filter), where filtering every sample cost r times as much.
