@@ -238,6 +238,11 @@ def _prose(path):
     return "\n".join(out)
 
 
+def _gap_time(label, case):
+    """A case's row of bench_gap_time.py's results under ``label``."""
+    return next(r for r in _results("gap_time")[label]["rows"] if r["case"] == case)
+
+
 @functools.cache
 def _results(name):
     return json.loads((RESULTS / f"{name}.json").read_text())
@@ -757,6 +762,15 @@ FIGURES = [
     Figure(GAP, "(136 s, 114 s and 142 s; 260 s and 346 s in families a and b before).",
            "gap_withheld.py --family a, b, e (backlash, seed 101; before: the rows on ff6a337 and 38bbb02)",
            lambda: [*[_case(f, "backlash", 101)["seconds"] for f in "abe"], 260, 346], slack=1.0),
+    Figure(GAP, "the cubic spring 114 -> 37 s, the hysteresis 84 -> 40 s, no effect 116 -> 32 s",
+           "bench_gap_time.py: gap_time.json (before, after)",
+           lambda: [v for name in ("cubic_stiffness", "hysteresis", "null") for v in
+                    (_gap_time("before", name)["seconds"], _gap_time("after", name)["seconds"])], slack=1.0),
+    Figure(GAP, "a Bouc-Wen step costs about 420 ns", "bench_gap_time.py: gap_time.json (after, cubic case)",
+           lambda: [_gap_time("after", "cubic_stiffness")["integrator"]["BoucWen at 5x"]["ns_per_step"]],
+           slack=30.0),
+    Figure(GAP, "within ``CONTENTION_DB`` (10 dB) of the best", "gap.diagnosis.CONTENTION_DB",
+           lambda: [importlib.import_module("sklearn_pnlss.gap.diagnosis").CONTENTION_DB]),
     Figure(GAP, "The stiff backlash (30 kN/m behind a 2.5 mm clearance) is the hardest case",
            "gap_withheld.py's CASES",
            lambda: [30 * _source_of("benchmarks/gap_withheld.py", "DeadZoneSpring(3e4, 2.5e-3)"), 2.5]),

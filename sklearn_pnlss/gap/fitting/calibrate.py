@@ -56,7 +56,8 @@ class EffectFit:
     physical : dict
         Physical parameter values.
     train_mse : float
-        Mean squared training simulation error, m^2.
+        Mean squared training simulation error, m^2 (at the reporting rate
+        once ``refined``, at the fitting rate before).
     n_evaluations : int
         Simulations of the training set used.
     converged : bool
