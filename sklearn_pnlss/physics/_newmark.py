@@ -413,17 +413,26 @@ def _parameter_term(pi, ydd, yd, y, dfdp):
 
 
 @njit(**_INLINE)
-def _initial_tangents(tangents, param_of, u0, y, yd, z, m, c, k, kinds, p_off, params, z_off,
+def _rate_tangents(s, pi, nz, dgdy, dgdyd, dgdz, dgdp):
+    """The internal states' rates' sensitivities in the direction ``s``
+    (moving parameter ``pi``), from those of y, yd and z already in ``s``."""
+    for j in range(nz):
+        rate = dgdy[j] * s[STATE_Y] + dgdyd[j] * s[STATE_YD]
+        for col in range(nz):
+            rate += dgdz[j, col] * s[STATE_Z + col]
+        if pi >= 3:
+            rate += dgdp[j, pi - 3]
+        s[STATE_Z + nz + j] = rate
+
+
+@njit(**_INLINE)
+def _initial_tangents(tangents, param_of, y, yd, ydd, z, m, c, k, kinds, p_off, params, z_off,
                       dfdz, g, dgdy, dgdyd, dgdz, dfdp, dgdp):
     """The acceleration's and the rates' sensitivities at a start in
-    equilibrium (``init_accel``), from those of (y, yd, z)."""
+    equilibrium (``init_accel``, its acceleration ``ydd``), from those of
+    (y, yd, z)."""
     nz = z.shape[0]
     fy, fyd = _element_derivatives(kinds, p_off, params, z_off, y, yd, z, dfdz, g, dgdy, dgdyd, dgdz, dfdp, dgdp)
-    total = 0.0
-    for e in range(kinds.shape[0]):
-        f, _, _ = _force(kinds[e], params, p_off[e], p_off[e + 1], y, yd, z, z_off[e], dfdz)
-        total += f
-    ydd = (u0 - c * yd - k * y - total) / m
     for d in range(tangents.shape[0]):
         s = tangents[d]
         pi = param_of[d]
@@ -431,13 +440,7 @@ def _initial_tangents(tangents, param_of, u0, y, yd, z, m, c, k, kinds, p_off, p
         for j in range(nz):
             moved += dfdz[j] * s[STATE_Z + j]
         s[STATE_YDD] = -moved / m
-        for j in range(nz):
-            rate = dgdy[j] * s[STATE_Y] + dgdyd[j] * s[STATE_YD]
-            for col in range(nz):
-                rate += dgdz[j, col] * s[STATE_Z + col]
-            if pi >= 3:
-                rate += dgdp[j, pi - 3]
-            s[STATE_Z + nz + j] = rate
+        _rate_tangents(s, pi, nz, dgdy, dgdyd, dgdz, dgdp)
 
 
 @njit(**_INLINE)
@@ -482,20 +485,12 @@ def _tangent_step(tangents, param_of, y1, yd1, ydd1, z1, h, m, c, k, kinds, p_of
                 _solve2_inplace(a_work, x)
             else:
                 _solve_inplace(a_work, x, n)
-        dy1 = x[0]
-        dyd1 = c_vel * dy1 + dyd_last
-        s[STATE_Y] = dy1
-        s[STATE_YD] = dyd1
-        s[STATE_YDD] = c_acc * dy1 + dydd_last
+        s[STATE_Y] = x[0]
+        s[STATE_YD] = c_vel * x[0] + dyd_last
+        s[STATE_YDD] = c_acc * x[0] + dydd_last
         for j in range(nz):
             s[STATE_Z + j] = x[1 + j]
-        for j in range(nz):
-            rate = dgdy[j] * dy1 + dgdyd[j] * dyd1
-            for col in range(nz):
-                rate += dgdz[j, col] * x[1 + col]
-            if pi >= 3:
-                rate += dgdp[j, pi - 3]
-            s[STATE_Z + nz + j] = rate
+        _rate_tangents(s, pi, nz, dgdy, dgdyd, dgdz, dgdp)
 
 
 # --------------------------------------------------------------------------
@@ -563,7 +558,7 @@ def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
                                       dfdz, dgdy, dgdyd, dgdz)
         ydd = (u[0] - c * yd - k * y - ftot) / m
         if n_dir > 0:
-            _initial_tangents(tangents, param_of, u[0], y, yd, z, m, c, k, kinds, p_off, params, z_off,
+            _initial_tangents(tangents, param_of, y, yd, ydd, z, m, c, k, kinds, p_off, params, z_off,
                               dfdz, g, dgdy, dgdyd, dgdz, dfdp, dgdp)
 
     peak[0] = abs(y)

@@ -160,12 +160,7 @@ def decimate_fir(x, factors, *, periodic=False):
     >>> y.shape
     (200,)
     """
-    x = check_signal(x)
-    for r in check_factors(factors):
-        if r == 1:
-            continue
-        x = _decimate_once(x, r, periodic)
-    return x
+    return decimate_columns(check_signal(x), factors, periodic=periodic)
 
 
 def upsample_fft(x, factor, *, periodic):

@@ -240,13 +240,13 @@ class _Objective:
         by simulation.  None where the recursion does not apply."""
         try:
             osc, transform, _ = effect_model(self.effect, theta, self.nominal, self.scales)
-            physical = _physical_derivatives(self.effect, theta, osc, self.nominal, self.scales, lower, upper)
+            physical = _physical_derivatives(self.effect, theta, osc, self.nominal, self.scales, upper)
             if physical is None or osc.time_varying:
                 return None
             key, states = self._steady
-            _, dy = simulate_sensitivities(osc, self.signals, transform, max_periods=FIT_MAX_PERIODS,
-                                           max_abs=self.max_abs,
-                                           steady_states=states if key == np.asarray(theta, float).tobytes() else None)
+            dy = simulate_sensitivities(osc, self.signals, transform, max_periods=FIT_MAX_PERIODS,
+                                        max_abs=self.max_abs,
+                                        steady_states=states if key == np.asarray(theta, float).tobytes() else None)
         except (ValueError, FloatingPointError, ZeroDivisionError):
             return None
         self.n_evaluations += 1
@@ -266,7 +266,7 @@ def _step(theta, i, upper):
     return -step if theta[i] + step > upper[i] else step
 
 
-def _physical_derivatives(effect, theta, osc, nominal, scales, lower, upper):
+def _physical_derivatives(effect, theta, osc, nominal, scales, upper):
     """Derivatives of the oscillator's physical parameters
     (:attr:`~sklearn_pnlss.physics.Oscillator.parameter_vector`) by
     ``theta``: differences of the effect's build, which costs no

@@ -16,6 +16,7 @@ settle on the other one, and no parameter change brings it back.
 import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from sklearn.utils import check_random_state
@@ -277,7 +278,10 @@ def _fine_response(osc, u_fine, P, fs_fine, transform, max_periods=MAX_PERIODS, 
                              initial_state=_continuation_state(osc, start), max_abs=max_abs).y, False, None
 
 
-_POOL = []
+@lru_cache(maxsize=1)
+def _signal_pool():
+    """The threads the signals of a set are simulated in, made once."""
+    return ThreadPoolExecutor(max_workers=os.cpu_count(), thread_name_prefix="signals")
 
 
 def _each_signal(func, *columns):
@@ -288,9 +292,7 @@ def _each_signal(func, *columns):
     rows = list(zip(*columns))
     if len(rows) < 2 or (os.cpu_count() or 1) < 2:
         return [func(*row) for row in rows]
-    if not _POOL:
-        _POOL.append(ThreadPoolExecutor(max_workers=os.cpu_count(), thread_name_prefix="signals"))
-    return [f.result() for f in [_POOL[0].submit(func, *row) for row in rows]]
+    return [f.result() for f in [_signal_pool().submit(func, *row) for row in rows]]
 
 
 def simulate_signals(osc, signals, transform=None, *, noise_rms=0.0, random_state=None,
@@ -358,30 +360,28 @@ def simulate_signals(osc, signals, transform=None, *, noise_rms=0.0, random_stat
 
 def simulate_sensitivities(osc, signals, transform=None, *, max_periods=MAX_PERIODS, max_abs=None,
                            steady_states=None):
-    """:func:`simulate_signals` with each signal's derivatives by the
-    oscillator's physical parameters (:attr:`Oscillator.parameter_vector`),
-    from the integrator's own sensitivity recursion (see
+    """Each signal's derivatives, at the data rate, by the oscillator's
+    physical parameters (:attr:`Oscillator.parameter_vector`), from the
+    integrator's own sensitivity recursion (see
     :meth:`Oscillator.sensitivity`): a Jacobian for the price of about two
     simulations, where forward differences cost one per parameter.
 
     A periodic signal's steady state is searched as in
     :func:`simulate_signals` (or taken from ``steady_states``, those it
     filled at the same parameters), then its period is run once more with
-    the sensitivities; the derivatives are decimated by the same filter as the
-    displacement (the added correction of a coarse set is a constant).
-    Raises ``ValueError`` for what the recursion does not cover (a
-    time-varying oscillator's periodic signal, a user's force element):
-    the caller differences instead.
+    the sensitivities, decimated by the same filter as the displacement
+    (circularly, one period, then repeated); a coarse set's added
+    correction is a constant and has none.  Raises ``ValueError`` for what
+    the recursion does not cover (a time-varying oscillator's periodic
+    signal, a user's force element): the caller differences instead.
 
     Returns
     -------
-    y : list of ndarray (n_samples_i,)
     dy : list of ndarray (n_samples_i, n_parameters)
     """
     fs_fine = signals.fs * signals.oversampling
     starts = signals.starts or [None] * len(signals.u_fine)
     known = steady_states or [None] * len(signals.u_fine)
-    y_out, dy_out = [], []
 
     def one(u_fine, P, start, state):
         periodic = P > 0
@@ -392,18 +392,11 @@ def simulate_sensitivities(osc, signals, transform=None, *, max_periods=MAX_PERI
                 raise ValueError("a time-varying oscillator has no periodic sensitivity.")
             if state is None:
                 state = _steady(osc, u_fine, fs_fine, max_periods, max_abs, start).final_state
-            y, dy = osc.sensitivity(u_fine, fs=fs_fine, periodic=True, steady_state=state)
-            y, dy = np.tile(y, P), np.tile(dy, (P, 1))
+            dy = osc.sensitivity(u_fine, fs=fs_fine, periodic=True, steady_state=state)[1]
         else:
-            y, dy = osc.sensitivity(u_fine, fs=fs_fine, periodic=False)
+            dy = osc.sensitivity(u_fine, fs=fs_fine, periodic=False)[1]
         if signals.oversampling > 1:
-            y = decimate_fir(y, signals.decimation, periodic=periodic)
             dy = decimate_columns(dy, signals.decimation, periodic=periodic)
-        return y, dy
+        return np.tile(dy, (P, 1)) if periodic else dy
 
-    for y, dy in _each_signal(one, signals.u_fine, signals.n_periods, starts, known):
-        y_out.append(y)
-        dy_out.append(dy)
-    if signals.correction is not None:
-        y_out = [y + c for y, c in zip(y_out, signals.correction)]
-    return y_out, dy_out
+    return _each_signal(one, signals.u_fine, signals.n_periods, starts, known)
