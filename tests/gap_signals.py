@@ -23,3 +23,13 @@ def gap_data(real, seed=0, n_periods=2, noise=2e-6, transform=None):
     y_train = simulate_signals(real, train, transform, noise_rms=noise, random_state=rng)
     y_val = simulate_signals(real, val, transform, noise_rms=noise, random_state=rng)
     return train.u, y_train, val.u, y_val
+
+
+def stub_effect(name, n_params=1, recalibration=False):
+    """An effect as the verdict sees it (its name and parameter count;
+    nothing to build), for tests of the decision and the report."""
+    from sklearn_pnlss.gap import Effect
+    attributes = dict(name=name, param_names=tuple(f"p{i}" for i in range(n_params)),
+                      limits=((-1.0, 1.0),) * n_params, listed_starts=((0.0,) * n_params,),
+                      is_recalibration=recalibration)
+    return type("Stub", (Effect,), attributes)()

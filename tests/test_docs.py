@@ -238,6 +238,11 @@ def _prose(path):
     return "\n".join(out)
 
 
+def _setting(name):
+    """A threshold of the gap diagnosis (sklearn_pnlss.gap.settings)."""
+    return getattr(importlib.import_module("sklearn_pnlss.gap.settings").SETTINGS, name)
+
+
 def _gap_time(label, case):
     """A case's row of bench_gap_time.py's results under ``label``."""
     return next(r for r in _results("gap_time")[label]["rows"] if r["case"] == case)
@@ -344,6 +349,20 @@ def _case(family, effect, seed):
     """A family's row of one effect case, answered right (seeds from 100: the
     second strength; from 500: the effect removed from the candidates)."""
     return next(r for r in _family_rows(family) if r["true"] == effect and r["seed"] == seed and r["ok"])
+
+
+def _family_t():
+    """Family t's summary and its rows (gap_withheld.py --family t)."""
+    results = _results("gap_withheld_family_t")
+    return results["summary"], results["rows"]
+
+
+def _pair_closures(strong, weak, seed, names):
+    """The closures (%) on validation of the single candidates ``names`` in
+    family t's case of ``strong`` with ``weak`` (gap_withheld.py)."""
+    row = next(r for r in _family_rows("t") if r["true"] == [strong, weak] and r["seed"] == seed)
+    closure = {name: c for name, _, c in row["ranking"]}
+    return [100 * closure[name] for name in names]
 
 
 def _lowest_closure_vs_achievable(effect, strength):
@@ -668,17 +687,17 @@ FIGURES = [
            "the bound tests/test_gap_calibrate.py asserts",
            lambda: [0.01 * _source_of("tests/test_gap_calibrate.py", 'refined.physical["k3"] == pytest.approx(1e8, rel=1e-4)')]),
     Figure(GAP, "the Bouc-Wen parameters of the demo below to within 0.1 %", DEMO, lambda: [None]),
-    Figure(GAP, "exceeds the floor by at least 0.5 dB", "gap.verdict.decision.MIN_EXCESS_DB",
-           lambda: [importlib.import_module("sklearn_pnlss.gap.verdict.decision").MIN_EXCESS_DB]),
+    Figure(GAP, "exceeds the floor by at least 0.5 dB", "gap.settings: min_excess_db",
+           lambda: [_setting("min_excess_db")]),
     Figure(GAP, "a refit that takes a 50 dB excess down to 25 dB removes 99.7 % of the excess *power* but leaves a gap "
                 "far above the noise; its closure is 0.5", "arithmetic of the closure's definition",
            lambda: [50, 25, 100 * (1 - 10 ** (-25 / 10)), 1 - 25 / 50]),
-    Figure(GAP, "Candidates whose closure is within 0.02 of the best", "gap.verdict.decision.TIE_CLOSURE",
-           lambda: [importlib.import_module("sklearn_pnlss.gap.verdict.decision").TIE_CLOSURE]),
-    Figure(GAP, "must close at least 90 % of the gap", "gap.verdict.decision.EXPLAINED_CLOSURE",
-           lambda: [100 * importlib.import_module("sklearn_pnlss.gap.verdict.decision").EXPLAINED_CLOSURE]),
-    Figure(GAP, "the black box itself closes at least 80 %", "gap.verdict.decision.BLACK_BOX_MIN_CLOSURE",
-           lambda: [100 * importlib.import_module("sklearn_pnlss.gap.verdict.decision").BLACK_BOX_MIN_CLOSURE]),
+    Figure(GAP, "Candidates whose closure is within 0.02 of the best", "gap.settings: tie_closure",
+           lambda: [_setting("tie_closure")]),
+    Figure(GAP, "must close at least 90 % of the gap", "gap.settings: explained_closure",
+           lambda: [100 * _setting("explained_closure")]),
+    Figure(GAP, "the black box itself closes at least 80 %", "gap.settings: black_box_min_closure",
+           lambda: [100 * _setting("black_box_min_closure")]),
     Figure(GAP, "(3 states, 3 branches, degree 7,", "gap.fitting.black_box N_STATES, N_BRANCHES, DEGREE",
            lambda: [getattr(importlib.import_module("sklearn_pnlss.gap.fitting.black_box"), name)
                     for name in ("N_STATES", "N_BRANCHES", "DEGREE")]),
@@ -766,46 +785,68 @@ FIGURES = [
            "bench_gap_time.py: gap_time.json (before, after)",
            lambda: [v for name in ("cubic_stiffness", "hysteresis", "null") for v in
                     (_gap_time("before", name)["seconds"], _gap_time("after", name)["seconds"])], slack=1.0),
-    Figure(GAP, "within ``CONTENTION_DB`` (10 dB) of the best", "gap.diagnosis.CONTENTION_DB",
-           lambda: [importlib.import_module("sklearn_pnlss.gap.diagnosis").CONTENTION_DB]),
+    Figure(R, "the main effect and the added one are both right in 12 of 12 cases",
+           "gap_withheld.py --family t: results/gap_withheld_family_t.json",
+           lambda: (lambda summary, rows: [
+               sum(r["main_ok"] and r["second_ok"] for r in rows), len(rows)])(*_family_t())),
+    Figure(GAP, "or a half (second seed) of the stronger's, 12 cases: the stronger named "
+                "as the main effect in 12 of 12, the weaker added in 12 of the 12 cases "
+                "where it pays on validation", "gap_withheld.py --family t: results/gap_withheld_family_t.json",
+           lambda: (lambda summary, rows: [
+               len(rows), round(summary["main_accuracy"] * len(rows)), len(rows),
+               sum(summary["second_named_where_it_pays"]), len(summary["second_named_where_it_pays"])])(
+               *_family_t())),
+    Figure(GAP, "the pair closes 93.7 % at least (the cubic spring with the stronger friction), the "
+                "others 98 % or more; 96 s per diagnosis (median), 163 s at most",
+           "gap_withheld.py --family t: results/gap_withheld_family_t.json",
+           lambda: (lambda summary, rows: [
+               100 * min(r["combinations"][0][2] for r in rows),
+               100 * sorted(r["combinations"][0][2] for r in rows)[1], summary["median_seconds"],
+               summary["max_seconds"]])(*_family_t()), slack=0.5),
+    Figure(GAP, "a hysteresis closed 56 % and the cubic spring alone 26 %",
+           "gap_withheld.py --family t (cubic spring with quadratic damping, seed 0)",
+           lambda: _pair_closures("cubic_stiffness", "quadratic_damping", 0, ("hysteresis", "cubic_stiffness")),
+           slack=1.0),
+    Figure(GAP, "and is explained when the last closes 90 %", "gap.settings: explained_closure",
+           lambda: [100 * _setting("explained_closure")]),
+    Figure(GAP, "within ``contention_db`` (10 dB) of the best", "gap.settings: contention_db",
+           lambda: [_setting("contention_db")]),
     Figure(GAP, "The stiff backlash (30 kN/m behind a 2.5 mm clearance) is the hardest case",
            "gap_withheld.py's CASES",
            lambda: [30 * _source_of("benchmarks/gap_withheld.py", "DeadZoneSpring(3e4, 2.5e-3)"), 2.5]),
     Figure(GAP, "at most 2 more budgets at the reporting rate, each from where the last stopped, while a budget "
-                "gains 0.5 dB", "gap.diagnosis.LEADER_BUDGETS, LEADER_PROGRESS_DB",
-           lambda: [getattr(importlib.import_module("sklearn_pnlss.gap.diagnosis"), name)
-                    for name in ("LEADER_BUDGETS", "LEADER_PROGRESS_DB")]),
+                "gains 0.5 dB", "gap.settings: leader_budgets, leader_progress_db",
+           lambda: [_setting(name) for name in ("leader_budgets", "leader_progress_db")]),
     Figure(GAP, "A training signal whose periods differ 10 times (in power) more than the",
-           "gap.verdict.noise_floor.UNSETTLED_RATIO",
-           lambda: [importlib.import_module("sklearn_pnlss.gap.verdict.noise_floor").UNSETTLED_RATIO]),
+           "gap.settings: unsettled_ratio",
+           lambda: [_setting("unsettled_ratio")]),
     Figure(GAP, "So a fit that stops on its budget within 10 dB of the noise also leaves out a signal whose "
                 "sensitivity to the parameters, relative to its size, is 10 times the median signal's or more.",
-           "gap.fitting.calibrate.NEEDLE_REACH_DB, JUMP_RATIO",
-           lambda: (lambda c: [c.NEEDLE_REACH_DB, c.JUMP_RATIO])(
-               importlib.import_module("sklearn_pnlss.gap.fitting.calibrate"))),
+           "gap.settings: needle_reach_db, jump_ratio",
+           lambda: [_setting("needle_reach_db"), _setting("jump_ratio")]),
     Figure(GAP, "On the clean family's first seed the crawl had stopped 0.15 % off in every parameter (-101.5 dB "
                 "against the floor's -102.7 dB, 225 s); the refit without its needle signal reaches the floor "
                 "(100.0 %, 147 s).", "gap_withheld.py --family e (backlash, seed 100; before: the row on 328f3cc)",
            lambda: [0.15, -101.5, -102.7, 225, *(lambda r: [100 * r["closure_vs_achievable"], r["seconds"]])(
                _case("e", "backlash", 100))], slack=1.0),
-    Figure(GAP, "a training signal whose misfit is 10 times the median signal's", "gap.fitting.calibrate.JUMP_RATIO",
-           lambda: [importlib.import_module("sklearn_pnlss.gap.fitting.calibrate").JUMP_RATIO]),
+    Figure(GAP, "a training signal whose misfit is 10 times the median signal's", "gap.settings: jump_ratio",
+           lambda: [_setting("jump_ratio")]),
     Figure(GAP, "stiff backlash of the first seed reaches the noise floor on validation (-102.7 dB and -103.2 dB)",
            "gap_withheld.py --family a, d",
            lambda: [_stiff_backlash(f)["ranking"][0][1] for f in "ad"]
            if all(abs(_stiff_backlash(f)["ranking"][0][1] - _stiff_backlash(f)["noise_floor_db"]) < 0.5 for f in "ad")
            else [-1, -1]),
-    Figure(GAP, "if freeing it there gains 6 dB or more", "gap.diagnosis.HIDDEN_DELAY_DB",
-           lambda: [importlib.import_module("sklearn_pnlss.gap.diagnosis").HIDDEN_DELAY_DB]),
-    Figure(GAP, "when the delay improves the refit by 1 dB or more", "gap.diagnosis.DELAY_FOUND_DB",
-           lambda: [importlib.import_module("sklearn_pnlss.gap.diagnosis").DELAY_FOUND_DB]),
-    Figure(GAP, "delay also moved a nominal parameter by 0.5 % or more", "gap.report.RECALIBRATION_SHOWN",
-           lambda: [100 * importlib.import_module("sklearn_pnlss.gap.report").RECALIBRATION_SHOWN]),
+    Figure(GAP, "if freeing it there gains 6 dB or more", "gap.settings: hidden_delay_db",
+           lambda: [_setting("hidden_delay_db")]),
+    Figure(GAP, "when the delay improves the refit by 1 dB or more", "gap.settings: delay_found_db",
+           lambda: [_setting("delay_found_db")]),
+    Figure(GAP, "delay also moved a nominal parameter by 0.5 % or more", "gap.settings: recalibration_shown",
+           lambda: [100 * _setting("recalibration_shown")]),
     Figure(GAP, "(``recalibration, with stiffness recalibrated by +5 %, a channel delay of 1.33 ms``",
            "tests/test_gap_measured_data.py::test_a_nominal_error_seen_through_a_sensor_delay_is_a_recalibration",
            lambda: [None, None]),
-    Figure(GAP, "exceeds the corrected one by 3 dB", "gap.fitting.calibrate.FINE_MISMATCH",
-           lambda: [10 * __import__("math").log10(importlib.import_module("sklearn_pnlss.gap.fitting.calibrate").FINE_MISMATCH)],
+    Figure(GAP, "exceeds the corrected one by 3 dB", "gap.settings: fine_mismatch",
+           lambda: [10 * __import__("math").log10(_setting("fine_mismatch"))],
            slack=0.1),
     # Gap diagnosis: benchmarks/gap_withheld.py
     Figure(GAP, "(4 realisations × 4 periods of 8192 samples at 750 Hz, validation one new period plus a "

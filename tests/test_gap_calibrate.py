@@ -1,14 +1,16 @@
 """Fitting an effect by simulation error (sklearn_pnlss.gap.fitting.calibrate):
 known parameters of simulated oscillators are recovered."""
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from scipy.optimize import least_squares
 
-from sklearn_pnlss.gap.fitting.calibrate import (_Objective, _refit_without_outliers, _solve, effect_model, fit_effect,
+from sklearn_pnlss.gap.fitting.calibrate import (_Objective, _refit_without_outliers, _solve, fit_effect,
                                                  meaningful_ftol, outlying_signals, parameter_covariance,
-                                                 per_signal_mse, per_signal_sensitivity, stalled_near_noise,
-                                                 with_recalibration)
-from sklearn_pnlss.gap.candidates.effects import Effect, Scales, delay_signal, make_effect
+                                                 per_signal_mse, per_signal_sensitivity, stalled_near_noise)
+from sklearn_pnlss.gap.candidates.effects import CubicSpring, Scales, delay_signal, make_effect
+from sklearn_pnlss.gap.settings import SETTINGS
 from sklearn_pnlss.gap.verdict.noise_floor import NoiseFloor
 from sklearn_pnlss.gap.fitting.simulate import SignalSet, simulate_signals
 from sklearn_pnlss.physics import BoucWen, CubicStiffness, Oscillator
@@ -42,7 +44,7 @@ def test_cubic_stiffness_is_recovered(train):
     assert fit.train_mse < 1e-24
     assert fit.converged
     assert fit.n_evaluations < 30  # measured: 13 simulations
-    osc, transform, physical = effect_model(fit.effect, fit.theta, NOMINAL, _scales(train, y))
+    osc, transform, physical = fit.effect.simulator(fit.theta, NOMINAL, _scales(train, y))
     assert transform is None and physical == fit.physical
     assert osc.forces == (CubicStiffness(fit.physical["k3"]),)
 
@@ -55,7 +57,7 @@ def test_jacobian_from_sensitivities_equals_differences(train, name):
     acts through the input and is differenced either way."""
     y = simulate_signals(NOMINAL.with_forces([BoucWen(1e4, 300.0, 0.8, -1.1, 1.0)]), train)
     recal = make_effect("recalibration")
-    effect = with_recalibration(make_effect(name), recal)
+    effect = make_effect(name).with_recalibration(recal)
     obj = _Objective(effect, NOMINAL, _scales(train, y), train, y, offsets=True)
     lower, upper = effect.bounds
     theta = np.clip(effect.starts[0] + 0.05, lower, upper)
@@ -105,16 +107,16 @@ def test_defect_correction_is_repeated_until_it_no_longer_moves(train, monkeypat
 
     y = simulate_signals(NOMINAL.with_forces([CubicStiffness(1e8)]), train, noise_rms=2e-6, random_state=0)
     coarse, scales = train.coarse(5, NOMINAL), _scales(train, y)
-    effect = with_recalibration(make_effect("cubic_stiffness"), make_effect("recalibration"))
+    effect = make_effect("cubic_stiffness").with_recalibration(make_effect("recalibration"))
     names = ("k3", "mass", "damping", "stiffness")
     full = fit_effect(effect, NOMINAL, scales, train, y, max_nfev=30, ftol=1e-12)
 
     def off_full(rounds):
-        monkeypatch.setattr(calibrate, "DEFECT_ROUNDS", rounds)
+        monkeypatch.setattr(calibrate, "SETTINGS", replace(SETTINGS, defect_rounds=rounds))
         fit = fit_effect(effect, NOMINAL, scales, coarse, y, max_nfev=20, fine_signals=train)
         return np.max(np.abs([fit.physical[k] / full.physical[k] - 1 for k in names]))
 
-    rounds = calibrate.DEFECT_ROUNDS
+    rounds = SETTINGS.defect_rounds
     assert off_full(1) > 5e-5  # measured: 1.0e-4 (damping)
     assert off_full(rounds) < 1e-5  # measured: 6e-7
 
@@ -153,7 +155,7 @@ def test_effect_with_free_nominal_recovers_both(train):
     nominal parameters free too, k3 and the stiffness are both recovered
     and the mass and damping stay at their nominal values."""
     y = simulate_signals(Oscillator(2.0, 10.0, 5.25e4, forces=(CubicStiffness(1e8),)), train)
-    effect = with_recalibration(make_effect("cubic_stiffness"), make_effect("recalibration"))
+    effect = make_effect("cubic_stiffness").with_recalibration(make_effect("recalibration"))
     assert effect.param_names == ("k3", "mass", "damping", "stiffness")
     fit = fit_effect(effect, NOMINAL, _scales(train, y), train, y, max_nfev=20)
     expected = dict(k3=1e8, mass=2.0, damping=10.0, stiffness=5.25e4)
@@ -166,10 +168,10 @@ def test_free_nominal_splits_theta_by_the_fitted_parameters():
     free, theta's last three entries are the mass, damping and stiffness
     changes."""
     scales = Scales(force=50.0, displacement=1e-3, velocity=0.1, duration=3.0, u_peak=150.0, fs=FS)
-    effect = with_recalibration(make_effect("hysteresis"), make_effect("recalibration"))
+    effect = make_effect("hysteresis").with_recalibration(make_effect("recalibration"))
     assert effect.bounds[0].size == 6
     theta = np.array([0.3, 0.5, -0.5, 0.1, 0.2, 0.3])
-    osc, _, physical = effect_model(effect, theta, NOMINAL, scales)
+    osc, _, physical = effect.simulator(theta, NOMINAL, scales)
     assert osc.forces == (BoucWen(0.3 * 5e4, 1e3, 0.5, -0.5, 1.0),)
     assert (osc.mass, osc.damping, osc.stiffness) == pytest.approx((2.2, 10.0 + 0.2 * 500.0, 5e4 + 0.3 * 5e4))
     assert physical["alpha"] == pytest.approx(1.5e4) and physical["stiffness"] == pytest.approx(6.5e4)
@@ -188,14 +190,15 @@ def test_input_delay_is_recovered(train):
 def test_unphysical_start_is_skipped(train):
     """A start whose model cannot be built (ValueError) gets a penalty
     residual; the fit goes on from the other start and finds k3."""
-    cubic = make_effect("cubic_stiffness")
+    class PositiveCubic(CubicSpring):
+        listed_starts = ((-1.0,), (0.0,))
 
-    def build(theta, nominal, scales):
-        if theta[0] < 0:
-            raise ValueError("not physical")
-        return cubic.build(theta, nominal, scales)
+        def build(self, theta, nominal, scales):
+            if theta[0] < 0:
+                raise ValueError("not physical")
+            return super().build(theta, nominal, scales)
 
-    effect = Effect("cubic", ("k3",), [np.array([-1.0]), np.array([0.0])], (np.array([-2.0]), np.array([2.0])), build)
+    effect = PositiveCubic()
     y = simulate_signals(NOMINAL.with_forces([CubicStiffness(1e8)]), train)
     fit = fit_effect(effect, NOMINAL, _scales(train, y), train, y, max_nfev=20)
     assert fit.physical["k3"] == pytest.approx(1e8, rel=1e-6)

@@ -6,8 +6,9 @@ import pytest
 from scipy import stats
 
 from sklearn_pnlss.gap.fitting.calibrate import EffectFit
-from sklearn_pnlss.gap.verdict.decision import EXPLAINED_CLOSURE, MIN_EXCESS_DB, TIE_CLOSURE, decide
-from sklearn_pnlss.gap.candidates.effects import Effect
+from sklearn_pnlss.gap.settings import SETTINGS
+from sklearn_pnlss.gap.verdict.decision import decide
+from gap_signals import stub_effect
 from sklearn_pnlss.gap.verdict.noise_floor import NoiseFloor, gap_test
 
 S2 = 1e-12  # noise variance, m^2
@@ -17,9 +18,7 @@ SIZE = 100_000
 
 def _fit(name, n_params=1, recalibration=False):
     """A fitted candidate as decide sees it (only names and counts matter)."""
-    effect = Effect(name, tuple(f"p{i}" for i in range(n_params)), [np.zeros(n_params)],
-                    (np.full(n_params, -1.0), np.full(n_params, 1.0)), build=None,
-                    is_recalibration=recalibration)
+    effect = stub_effect(name, n_params, recalibration)
     return EffectFit(effect, np.zeros(n_params), {"p0": 1.5}, train_mse=4e-12, n_evaluations=1,
                      converged=True, message="")
 
@@ -83,8 +82,8 @@ def test_no_gap_at_the_noise_floor():
 
 def test_small_excess_is_no_gap_even_when_significant():
     """With 1e5 noise samples per signal an excess of 0.4 dB is far beyond
-    chance, but below MIN_EXCESS_DB it is not worth a diagnosis; 0.6 dB is."""
-    assert MIN_EXCESS_DB == 0.5
+    chance, but below SETTINGS.min_excess_db it is not worth a diagnosis; 0.6 dB is."""
+    assert SETTINGS.min_excess_db == 0.5
     small = _decide([10**0.04 * S2], [(_fit("c"), [S2])])
     assert small.p_value < 1e-10
     assert small.best_effect is None and not small.significant
@@ -106,9 +105,9 @@ def test_p_value_is_chi_square_with_the_noise_dof():
 
 def test_recalibration_is_preferred_within_reach_of_the_best():
     """New physics closing 97 % against a refit of the nominal parameters
-    closing 96 %: within TIE_CLOSURE (plus the noise's spread, 0.14 % here),
+    closing 96 %: within SETTINGS.tie_closure (plus the noise's spread, 0.14 % here),
     the refit wins; at 90 % it does not."""
-    assert TIE_CLOSURE == 0.02
+    assert SETTINGS.tie_closure == 0.02
     excess = 40.0
     nu = 1.0 * SIZE
     spread = 10 * np.log10(1 + 3 * np.sqrt(2 / nu)) / excess
@@ -124,8 +123,8 @@ def test_recalibration_is_preferred_within_reach_of_the_best():
     d = _decide([1e-8], [(_fit("cubic"), [after(0.97)]), (_fit("recal", 3, True), [after(0.90)])])
     assert d.best_effect == "cubic"
     # at the edge of reach: 0.97 - 0.02 - spread, just inside and just outside
-    inside = 0.97 - TIE_CLOSURE - 0.9 * spread
-    outside = 0.97 - TIE_CLOSURE - 1.1 * spread
+    inside = 0.97 - SETTINGS.tie_closure - 0.9 * spread
+    outside = 0.97 - SETTINGS.tie_closure - 1.1 * spread
     for closure, chosen in ((inside, "r"), (outside, "cubic")):
         d = _decide([1e-8], [(_fit("cubic"), [after(0.97)]), (_fit("r", 3, True), [after(closure)])])
         assert d.best_effect == chosen
@@ -141,9 +140,9 @@ def test_fewer_parameters_win_among_equivalent_candidates():
 
 
 def test_unexplained_when_the_best_closes_too_little():
-    """The best candidate closes 80 % < EXPLAINED_CLOSURE: unexplained,
+    """The best candidate closes 80 % < SETTINGS.explained_closure: unexplained,
     and the black box's closure (95 %) is reported as the yardstick."""
-    assert EXPLAINED_CLOSURE == 0.9
+    assert SETTINGS.explained_closure == 0.9
     d = _decide([1e-8], [(_fit("c"), [10**0.8 * S2])], black_box=[10**0.2 * S2])
     assert d.best_effect == "unexplained" and not d.explained and d.significant
     assert d.ranking[0].closure == pytest.approx(0.8)
@@ -178,3 +177,34 @@ def test_estimated_floor_needs_a_dB_of_excess():
     before = [10**0.07 * S2] * 2
     assert _decide(before, [(_fit("c"), [S2, S2])], noise=estimated).best_effect is None
     assert _decide(before, [(_fit("c"), [S2, S2])]).best_effect == "c"
+
+
+def _decide_with(before, candidates, combinations):
+    """``_decide`` with the forward selection's combinations (fit, mse per
+    signal), each extending the one before."""
+    y_meas = [np.zeros(SIZE) for _ in before]
+    return decide([f for f, _ in candidates], y_meas, [_with_mse(b) for b in before],
+                  [[_with_mse(a) for a in m] for _, m in candidates], None, NOISE, significance=1e-3,
+                  combinations=[f for f, _ in combinations],
+                  y_combinations=[[_with_mse(a) for a in m] for _, m in combinations])
+
+
+def test_an_added_effect_names_the_pair_s_first_as_the_main_one():
+    """40 dB above the noise: a flexible effect closes 55 % alone, the
+    cubic spring 25 %; the cubic spring with friction closes all of it, and
+    a third effect adds nothing beyond the tie.  The pair's first effect is
+    the main one, friction is added, the third is not."""
+    d = _decide_with([1e-8], [(_fit("flexible", 3), [10**1.8 * S2]), (_fit("cubic"), [10**3 * S2])],
+                     [(_fit("cubic + friction", 2), [S2]), (_fit("cubic + friction + other", 3), [0.99 * S2])])
+    assert d.best_effect == "cubic" and d.main_effect == "cubic" and d.explained
+    assert [r.name for r in d.added_effects] == ["cubic + friction"]
+    assert "with friction added, 100 %" in d.reason
+
+
+def test_a_pair_that_does_not_pay_leaves_the_verdict():
+    """The pair closes 56 % where the best single closes 55 %: within the
+    tie, so the verdict is the single one's (unexplained), naming it as the
+    main effect."""
+    d = _decide_with([1e-8], [(_fit("flexible", 3), [10**1.8 * S2]), (_fit("cubic"), [10**3 * S2])],
+                     [(_fit("cubic + friction", 2), [10**1.76 * S2])])
+    assert d.best_effect == "unexplained" and d.main_effect == "flexible" and not d.added_effects

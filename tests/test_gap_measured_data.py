@@ -6,9 +6,8 @@ import numpy as np
 import pytest
 
 from sklearn_pnlss.gap import GapDiagnosis, linear_nominal
-from sklearn_pnlss.gap.fitting.calibrate import with_recalibration
 from sklearn_pnlss.gap.candidates.clues import DataClues, backlash_start, read_clues
-from sklearn_pnlss.gap.candidates.effects import Scales, delay_signal, make_effect, recalibration_effect
+from sklearn_pnlss.gap.candidates.effects import Backlash, Recalibration, Scales, delay_signal, make_effect
 from sklearn_pnlss.gap.report import GapReport
 from sklearn_pnlss.gap.fitting.simulate import SignalSet, misfit, simulate_signals
 from sklearn_pnlss.gap.candidates.stiffness_start import measured_stiffness_change
@@ -97,7 +96,7 @@ def test_force_law_start_solves_effect_and_nominal_errors_together(duffing):
     stiffness = nominal.stiffness + theta[1] * scales.stiffness
     assert k3 == pytest.approx(1e8, rel=0.02)
     assert stiffness == pytest.approx(5e4, rel=0.02)
-    joint = with_recalibration(cubic, recalibration_effect(("stiffness",)))
+    joint = cubic.with_recalibration(Recalibration(("stiffness",)))
     assert any(np.allclose(start, theta) for start in joint.data_starts(clues, nominal, scales))
 
 
@@ -226,11 +225,11 @@ def test_backlash_start_with_an_off_nominal():
     nominal = Oscillator(2.0, 13.0, 4e4)
     clues, scales = _backlash_clues(nominal)
     disp = scales.displacement
-    theta = backlash_start(clues, scales, nominal=nominal, free=("damping", "stiffness"))
+    theta = backlash_start(clues, scales, Backlash.spring, nominal=nominal, free=("damping", "stiffness"))
     kb, gap = theta[0] * scales.stiffness, theta[1] * disp
     assert kb == pytest.approx(2e4, rel=0.05) and gap == pytest.approx(1e-3, rel=0.05)
     assert nominal.stiffness + theta[3] * scales.stiffness == pytest.approx(5e4, rel=0.02)
-    fixed = backlash_start(clues, scales)
+    fixed = backlash_start(clues, scales, Backlash.spring)
     assert abs(fixed[1] * disp / 1e-3 - 1) > 0.1 or abs(fixed[0] * scales.stiffness / 2e4 - 1) > 0.1
 
 
@@ -246,7 +245,7 @@ def test_a_joint_start_with_the_mass_freed_is_profiled_along_the_mass():
     nominal = Oscillator(1.7, 13.0, 4e4)
     clues, scales = _backlash_clues(nominal)
     disp = scales.displacement
-    rows = backlash_start(clues, scales, nominal=nominal, free=("mass", "damping", "stiffness"))
+    rows = backlash_start(clues, scales, Backlash.spring, nominal=nominal, free=("mass", "damping", "stiffness"))
     assert rows.shape == (1 + MASS_PROFILE.size, 5)
     np.testing.assert_allclose(rows[1:, 2] - rows[0, 2], MASS_PROFILE, atol=1e-12)
     mass = nominal.mass * (1 + rows[:, 2])

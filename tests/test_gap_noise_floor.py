@@ -12,8 +12,9 @@ import pytest
 
 from sklearn_pnlss.gap import GapDiagnosis
 from sklearn_pnlss.gap.fitting.calibrate import EffectFit
-from sklearn_pnlss.gap.verdict.decision import BLACK_BOX_MIN_CLOSURE, EXPLAINED_CLOSURE, decide
-from sklearn_pnlss.gap.candidates.effects import Effect
+from sklearn_pnlss.gap.settings import SETTINGS
+from sklearn_pnlss.gap.verdict.decision import decide
+from gap_signals import stub_effect
 from sklearn_pnlss.gap.verdict.noise_floor import (
     NoiseFloor,
     estimate_noise,
@@ -288,8 +289,7 @@ SIZE = 100_000
 
 
 def _fit(name, n_params=1, recalibration=False):
-    effect = Effect(name, tuple(f"p{i}" for i in range(n_params)), [np.zeros(n_params)],
-                    (np.full(n_params, -1.0), np.full(n_params, 1.0)), build=None, is_recalibration=recalibration)
+    effect = stub_effect(name, n_params, recalibration)
     return EffectFit(effect, np.zeros(n_params), {}, train_mse=S2, n_evaluations=1, converged=True, message="")
 
 
@@ -309,7 +309,7 @@ def test_as_much_as_a_good_black_box_is_explained_when_the_floor_is_estimated():
     """Against an estimated floor a candidate closing 85 % is explained when
     the black box closes 86 % (both stop where the floor estimate is off);
     against the period-to-period floor (exact) it is not."""
-    assert EXPLAINED_CLOSURE == 0.9 and BLACK_BOX_MIN_CLOSURE == 0.8
+    assert SETTINGS.explained_closure == 0.9 and SETTINGS.black_box_min_closure == 0.8
     d = _decide(0.85, 0.86, "non_excited_lines")
     assert d.best_effect == "c" and d.explained
     assert "as much as the black box (86 %)" in d.reason

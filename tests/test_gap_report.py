@@ -6,7 +6,7 @@ import numpy as np
 
 from sklearn_pnlss.gap.fitting.calibrate import EffectFit
 from sklearn_pnlss.gap.verdict.decision import decide, percent
-from sklearn_pnlss.gap.candidates.effects import Effect
+from gap_signals import stub_effect
 from sklearn_pnlss.gap.verdict.noise_floor import NoiseFloor
 from sklearn_pnlss.gap.report import GapReport
 
@@ -17,7 +17,7 @@ NOISE = NoiseFloor(S2, np.full(513, S2), 1.0, source="periods",
 
 
 def _fit(name):
-    effect = Effect(name, ("p",), [np.zeros(1)], (np.full(1, -1.0), np.full(1, 1.0)), build=None)
+    effect = stub_effect(name)
     return EffectFit(effect, np.zeros(1), {"p": 1.5}, train_mse=S2, n_evaluations=1, converged=True, message="")
 
 

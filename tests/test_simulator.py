@@ -17,6 +17,7 @@ from sklearn_pnlss.physics import (
     Oscillator,
     QuadraticDamping,
     QuadraticStiffness,
+    SeriesDamper,
     StiffnessDrift,
     decimate_fir,
     fir_decimation_filter,
@@ -373,6 +374,7 @@ SENSITIVITY_ELEMENTS = {
     "quadratic_damping": (QuadraticDamping(15.0),),
     "dead_zone": (DeadZoneSpring(1e4, 1.5e-3),),
     "coupled_mass": (CoupledMass(0.2, 15.0, 0.2 * (2 * np.pi * 60) ** 2),),
+    "series_damper": (SeriesDamper(30.0, 1e4),),
 }
 
 

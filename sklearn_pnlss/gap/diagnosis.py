@@ -1,14 +1,11 @@
 """GapDiagnosis: where a physical simulator misses the measurements, which
 unmodelled effect explains it, and by how much adding it shrinks the gap."""
-import itertools
 import time
 import warnings
-from dataclasses import replace
 from numbers import Integral, Real
 
 import numpy as np
 from joblib import Parallel, delayed
-from scipy.stats import chi2
 from sklearn.base import BaseEstimator
 from sklearn.utils import check_random_state
 from sklearn.utils.validation import check_is_fitted
@@ -16,18 +13,18 @@ from sklearn.utils.validation import check_is_fitted
 from ..physics.oscillator import Oscillator
 from ..utils.parameters import Interval, validates_parameters
 from ..utils.validation import as_signal_list, check_period
-from .fitting.black_box import branch_opinions, fit_black_box
-from .fitting.calibrate import (at_rate, effect_model, fit_effect, meaningful_ftol, parameter_covariance,
-                                refine_fit, with_delay, with_recalibration)
+from .fitting.black_box import branch_opinions
+from .fitting.calibrate import meaningful_ftol, parameter_covariance
 from .candidates.clues import read_clues
-from .verdict.decision import TIE_CLOSURE, decide
-from .candidates.effects import (NOMINAL_PARAMETERS, Scales, default_effects, delay_signal, make_effect,
-                                 recalibration_effect)
-from .verdict.noise_floor import (UNSETTLED_RATIO, estimate_noise, non_excited_noise, repeated_input_noise,
+from .verdict.decision import decide
+from .candidates.effects import NOMINAL_PARAMETERS, Recalibration, Scales, default_effects, make_effect
+from .verdict.noise_floor import (estimate_noise, non_excited_noise, repeated_input_noise,
                                   residual_noise, unsettled_signals)
-from .report import RECALIBRATION_SHOWN, GapReport
+from .report import GapReport
 from .fitting.simulate import SignalSet, detect_period, measured_starts, misfit, simulate_signals
 from .where import locate_gap, signal_derivative
+from .stages import BLACK_BOX, STAGES, Fitting
+from .settings import SETTINGS
 
 __all__ = ["GapDiagnosis"]
 
@@ -48,50 +45,6 @@ def _check_pairs(u_list, y_list, xname, yname):
     for i, (u, y) in enumerate(zip(u_list, y_list)):
         if u.size != y.size:
             raise ValueError(f"{xname}[{i}] has {u.size} samples but {yname}[{i}] has {y.size}.")
-
-
-_BLACK_BOX = "__black_box__"
-#: Draws of the best candidate's parameters from their covariance that tell
-#: a validation signal it cannot pin down (see
-#: :meth:`GapDiagnosis._sensitive_signals`).
-SENSITIVITY_DRAWS = 6
-#: Training improvement (dB) of the nominal refit with a channel delay over
-#: the refit alone above which the delay is fitted with every candidate.
-DELAY_FOUND_DB = 1.0
-#: Channel delays, samples, at which the clues of a candidate are read when
-#: a delay may hide behind it (see :meth:`GapDiagnosis._hidden_delay`).
-HIDDEN_DELAY_SHIFTS = (0.5, 1.0, 1.5, 2.0, 3.0)
-#: Training improvement (dB) of the best candidate with a channel delay over
-#: it alone above which a delay the first look missed is taken as found.
-#: Higher than ``DELAY_FOUND_DB``: a candidate that does not fit the data
-#: also gains from any extra parameter (measured: 2-3 dB from a spurious
-#: delay on a backlash it does not explain), while a delay hidden behind
-#: the right effect is worth tens of dB once both are fitted.
-HIDDEN_DELAY_DB = 6.0
-#: Share of the nominal's start-up transient found in a signal's misfit above
-#: which ``period=None`` is warned about (see ``_warn_if_steady_state``):
-#: three standard deviations of a chance projection on a short record.
-STEADY_STATE_SHARE = 0.3
-#: Further budgets of ``max_nfev`` iterations the leading candidate gets
-#: when its fit stops on the budget while still improving (see
-#: :meth:`GapDiagnosis._polish_leader`).
-LEADER_BUDGETS = 2
-#: Training improvement (dB) a further budget must bring for the next one.
-LEADER_PROGRESS_DB = 0.5
-#: Candidates whose training error at the fitting rate is within this many
-#: dB of the best one's are refined at the reporting rate (see
-#: :meth:`GapDiagnosis._refine_contenders`); the others keep their coarse fit.
-CONTENTION_DB = 10.0
-
-
-def _expected_cost(name, effects):
-    """Rough relative cost of a task, to start the long ones first: the
-    starts times the parameters (each iteration simulates once per
-    parameter); the black box counts as a mid-sized candidate."""
-    if name == _BLACK_BOX:
-        return 8
-    effect = next(e for e in effects if e.name == name)
-    return len(effect.starts) * max(effect.n_params, 1)
 
 
 class GapDiagnosis(BaseEstimator):
@@ -146,7 +99,7 @@ class GapDiagnosis(BaseEstimator):
     fit_oversampling : int, default=5
         Integration rate over ``fs`` while fitting the candidates, with the
         nominal model's discretisation error carried over (see
-        :meth:`SignalSet.coarse`); the candidates within ``CONTENTION_DB``
+        :meth:`SignalSet.coarse`); the candidates within ``SETTINGS.contention_db``
         of the best are then refined at ``oversampling``, and every fit is
         scored there.
     black_box : bool, default=True
@@ -179,6 +132,11 @@ class GapDiagnosis(BaseEstimator):
         The fitted candidates, in the order of ``effects``; when a channel
         delay is found and the nominal's refit with it moves a parameter,
         that refit is ``recalibration`` and ``input_delay`` is left out.
+    combinations_ : list of EffectFit
+        The forward selection's fits: the best candidate with a second
+        effect, then with a third, each kept while it adds to the one
+        before on training (see :func:`sklearn_pnlss.gap.stages.added_effects`);
+        empty when the best candidate alone explains the training data.
     black_box_ : DecoupledPNLSSRegressor or None
     black_box_branches_ : list of dict
         Reading of each black-box branch on the training signals (see
@@ -267,10 +225,6 @@ class GapDiagnosis(BaseEstimator):
             if e.name in seen:
                 raise ValueError(f"effect {e.name!r} is listed twice in effects.")
             seen.add(e.name)
-        free = self._free_nominal()
-        if free:
-            recal = recalibration_effect(free)
-            effects = [recal if e.is_recalibration else with_recalibration(e, recal) for e in effects]
         return effects
 
     def _free_nominal(self):
@@ -342,97 +296,20 @@ class GapDiagnosis(BaseEstimator):
             [misfit(a, b, self.offsets) for a, b in zip(y_nominal, y_list)]) ** 2)))
 
         clues = read_clues(self.nominal, u_list, y_centred, y_nominal, train.n_periods, self.period_, self.fs)
-        coarse = train.coarse(self.fit_oversampling, self.nominal)
         self._log(f"fitting {len(effects)} candidates{' and the black box' if self.black_box else ''} "
                   f"on {len(u_list)} signals")
-        ftol = meaningful_ftol(self.noise_, y_all.size)
-
-        settings = dict(ftol=ftol, offsets=self.offsets,
+        settings = dict(ftol=meaningful_ftol(self.noise_, y_all.size), offsets=self.offsets,
                         noise_variance=None if self.noise_ is None else self.noise_.variance)
-
-        def fit_task(effect, clues=clues, max_nfev=self.max_nfev, full_rate=False, refine=True):
-            # full_rate: at the reporting rate only (carrying on a fit that
-            # has been refined there already); refine=False: at the fitting
-            # rate only (see _refine_contenders)
-            return delayed(fit_effect)(effect, self.nominal, self.scales_, train if full_rate else coarse, y_list,
-                                       max_nfev=max_nfev, fine_signals=train if refine and not full_rate else None,
-                                       clues=clues, **settings)
-
-        def refine_task(fit, clues=clues):
-            return delayed(refine_fit)(fit, self.nominal, self.scales_, coarse, y_list, fine_signals=train,
-                                       clues=clues, max_nfev=self.max_nfev, **settings)
-
-        def aligned_clues(delay_s):
-            # The clues as the delayed model sees the data: the input (and
-            # the nominal's response, time-invariant) delayed by the channel
-            # delay; read off the raw channels, a delay of a millisecond is
-            # a phase error larger than a second mode's whole change.
-            periodic = [bool(P) for P in train.n_periods]
-            shift = delay_s * self.fs
-            return read_clues(self.nominal, [delay_signal(u, shift, p) for u, p in zip(u_list, periodic)], y_centred,
-                              [delay_signal(y, shift, p) for y, p in zip(y_nominal, periodic)], train.n_periods,
-                              self.period_, self.fs)
-
-        finished = itertools.count(1)
-        # fits planned so far (a hidden channel delay adds refits), and the names fitted
-        n_tasks, fitted = [len(effects) + bool(self.black_box)], set()
-
-        def announced(name, task):
-            # Each candidate says when it is done (from its worker thread):
-            # the progress of a fit that takes minutes.
-            func, args, kwargs = task
-            out = func(*args, **kwargs)
-            if self.verbose:
-                what = "the black box" if name == _BLACK_BOX else (
-                    f"{name}: training {10 * np.log10(out.train_mse):.2f} dB, {out.n_evaluations} "
-                    f"simulations, {out.seconds:.1f} s")
-                self._log(f"{next(finished)}/{n_tasks[0]} done, {what}")
-            return out
-
-        def run(tasks):
-            # One pool, the costliest started first so that the last to
-            # finish is a short one.
-            n_tasks[0] += len(fitted.intersection(tasks))
-            fitted.update(tasks)
-            order = sorted(tasks, key=lambda name: -_expected_cost(name, effects))
-            return dict(zip(order, Parallel(n_jobs=self.n_jobs, prefer="threads")(
-                delayed(announced)(k, tasks[k]) for k in order)))
-
-        # First the nominal's own errors: recalibration, and a delay between
-        # the force and displacement channels with it.  A delay found there
-        # is a property of the measurement chain (a sensor, an anti-alias
-        # filter), so every other candidate is fitted with it free too.
-        done, self.delay_ = {}, None
-        first = self._measurement_candidates(effects)
-        if first:
-            done = run({e.name: fit_task(e) for e in first})
-            self.delay_ = self._found_delay(done)
-            if self.delay_ is not None:
-                self._log(f"the data carry a delay of {1e3 * self.delay_['delay_s']:.3g} ms "
-                          f"({self.delay_['gain_db']:.1f} dB better fit); it is fitted with every candidate")
-                clues = aligned_clues(self.delay_["delay_s"])
-                effects = [e if e.name in done else with_delay(e, make_effect("input_delay"), self.delay_["theta"])
-                           for e in effects]
-                effects = self._recalibration_with_delay(effects, done)
-            # Every other candidate contains the nominal's refit: the coarse
-            # rate corrected by the refit's own discretisation error leaves
-            # them the effect's part alone (corrected by the nominal's, a
-            # stiffness 5 % off left every candidate 7 dB above the noise).
-            refit = min(self._nested_fits(effects, done), key=lambda f: f.train_mse)
-            coarse = train.coarse(self.fit_oversampling,
-                                  *effect_model(refit.effect, refit.theta, self.nominal, self.scales_)[:2])
-            done = {name: at_rate(fit, self.nominal, self.scales_, coarse, y_list, self.offsets)
-                    for name, fit in done.items()}
-        tasks = {e.name: fit_task(e, clues, refine=False) for e in effects if e.name not in done}
-        if self.black_box:
-            tasks[_BLACK_BOX] = delayed(fit_black_box)(u_list, y_centred, self.period, self.random_state, 1)
-        done.update(run(tasks))
-        self._refine_contenders(effects, done, refine_task, run, y_all.size)
-        if first and self.delay_ is None:
-            effects = self._hidden_delay(effects, done, first, fit_task, run, aligned_clues)
-        self._polish_leader(effects, done, fit_task, run)
+        free = self._free_nominal()
+        run = Fitting(self, u_list, y_list, y_centred, y_nominal, train,
+                      train.coarse(self.fit_oversampling, self.nominal), clues, effects,
+                      Recalibration(free) if free else None, settings)
+        for stage in STAGES:
+            stage(run)
+        effects, done, coarse, self.delay_ = run.effects, run.done, run.coarse, run.delay
+        self.combinations_ = run.combinations
         self.fits_ = [done[e.name] for e in effects]
-        self.black_box_, self.black_box_branches_ = done.get(_BLACK_BOX), []
+        self.black_box_, self.black_box_branches_ = done.get(BLACK_BOX), []
         if self.black_box_ is not None:
             # Read on the training signals: the branches' own range.
             self.black_box_branches_ = branch_opinions(self.black_box_, u_list, y_list, velocity_list,
@@ -459,7 +336,7 @@ class GapDiagnosis(BaseEstimator):
         one = len(self.unsettled_signals_) == 1
         warnings.warn(
             f"Training signal{'' if one else 's'} {which} never settle{'s' if one else ''}: "
-            f"{'its' if one else 'their'} periods differ {UNSETTLED_RATIO:g} times (power) or more than the "
+            f"{'its' if one else 'their'} periods differ {SETTINGS.unsettled_ratio:g} times (power) or more than the "
             f"quietest other signal's periods do (a chaotic response, a record started before the transient "
             f"died, or a structure that changed during it). No periodic simulation can follow such a signal, "
             f"and its spread is not the sensor's noise: left out of the fits and the noise floor.",
@@ -474,201 +351,6 @@ class GapDiagnosis(BaseEstimator):
     def _outputs(self, y_list):
         """The measured displacements, less their means with ``offsets``."""
         return [y - y.mean() for y in y_list] if self.offsets else y_list
-
-    def _measurement_candidates(self, effects):
-        """``recalibration`` and ``input_delay`` when both are candidates
-        and the nominal is freed (they are then nested: the delay at zero is
-        the recalibration)."""
-        by_name = {e.name: e for e in effects}
-        if not self._free_nominal() or "recalibration" not in by_name or "input_delay" not in by_name:
-            return []
-        return [by_name["recalibration"], by_name["input_delay"]]
-
-    def _found_delay(self, done):
-        """The channel delay the training data show, or None: the nominal
-        refit with a delay must beat the refit alone by ``DELAY_FOUND_DB``."""
-        recal, delay = done["recalibration"], done["input_delay"]
-        gain_db = 10 * np.log10(recal.train_mse / delay.train_mse)
-        if gain_db < DELAY_FOUND_DB:
-            return None
-        return dict(theta=float(delay.theta[0]), delay_s=float(delay.physical["delay_s"]), gain_db=float(gain_db))
-
-    def _recalibration_with_delay(self, effects, done):
-        """The candidates once the first look has found a channel delay
-        (``done`` is updated in place).
-
-        The delay is the measurement chain's, so the nominal's own error is
-        the refit *with* it: when that refit moved a nominal parameter by
-        ``RECALIBRATION_SHOWN`` or more, it becomes ``recalibration`` (the
-        verdict names the parameters and the channel delay) and
-        ``input_delay`` leaves the candidates: a stiffness 5 % off seen
-        through a sensor's delay is a recalibration, not a delay with a side
-        note.  The refit without the delay, left far above the noise, is no
-        candidate any more.  When nothing moved, the delay alone explains
-        the nominal's error and is reported as ``input_delay``.
-        """
-        refit = done["input_delay"]
-        if all(abs(v) < RECALIBRATION_SHOWN for v in self._nominal_moves(refit).values()):
-            return effects
-        recal = next(e for e in effects if e.is_recalibration)
-        relabelled = replace(refit.effect, name=recal.name, is_recalibration=True,
-                             description=recal.description + ", with the channels' delay")
-        done[recal.name] = replace(refit, effect=relabelled)
-        del done["input_delay"]
-        return [relabelled if e.is_recalibration else e for e in effects if e.name != "input_delay"]
-
-    def _refine_contenders(self, effects, done, refine_task, run, n_samples):
-        """Refine at the reporting rate the candidates still in contention
-        (``done`` is updated in place): those whose training error at the
-        fitting rate is within ``CONTENTION_DB`` of the best one's and
-        significantly below that of the nominal's refit they contain.
-
-        The verdict compares the best candidates, and their parameters must
-        hold at the rate every validation simulation runs at; a candidate
-        ten times worse on training cannot become the best on validation,
-        and refining it (the model's own discretisation error carried over,
-        a check at the reporting rate, sometimes a whole fit there) was half
-        of its time: on the clean cubic case, a fit of the wrong hysteresis
-        at the reporting rate cost 99 of a diagnosis' 150 s.
-        """
-        fitted = [e for e in effects if e.name in done and done[e.name].effect.n_params]
-        if not fitted:
-            return
-        best = min(done[e.name].coarse_mse for e in fitted)
-        nested = min(self._nested_fits(effects, done), key=lambda f: f.coarse_mse, default=None)
-        contenders = [e.name for e in fitted if done[e.name].coarse_mse <= best * 10 ** (CONTENTION_DB / 10)
-                      and not done[e.name].refined and self._adds_to(done[e.name], nested, n_samples)]
-        done.update(run({name: refine_task(done[name]) for name in contenders}))
-
-    def _nested_fits(self, effects, done):
-        """The fits that every candidate contains: the nominal's refit
-        (``recalibration``, when the nominal is freed), and the refit with
-        the channel delay once one is found (every candidate is then fitted
-        with it)."""
-        if not self._free_nominal():
-            return []
-        return [done[e.name] for e in effects if e.name in done
-                and (e.is_recalibration or (self.delay_ is not None and e.name == "input_delay"))]
-
-    def _adds_to(self, fit, nested, n_samples):
-        """Whether ``fit`` explains more of the training data than
-        ``nested``, the fit it contains, by what the verdict could tell on
-        validation: its cost lower by more than the chi-square quantile of
-        its extra parameters at the diagnosis' ``significance``, in units of
-        the noise (an F-test with the noise known), and its error lower by
-        more than ``TIE_CLOSURE`` of the nominal's excess over the noise, in
-        dB (the verdict's own tie; far above the noise the first test
-        passes for any extra parameter).  A candidate that does not cannot
-        beat the nominal's refit, which the verdict prefers whenever it
-        explains as much.  Without a nested fit or a noise floor, every
-        candidate adds."""
-        if nested is None or self.noise_ is None or fit is nested:
-            return True
-        extra = max(fit.effect.n_params - nested.effect.n_params, 1)
-        gain = (nested.coarse_mse - fit.coarse_mse) * n_samples * self.noise_.dof_per_sample / self.noise_.variance
-        excess_db = self.train_gap_db_ - 10 * np.log10(self.noise_.variance)
-        gain_db = 10 * np.log10(nested.coarse_mse / fit.coarse_mse)
-        return bool(gain > chi2.ppf(1 - self.significance, extra) and gain_db > TIE_CLOSURE * excess_db)
-
-    def _polish_leader(self, effects, done, fit_task, run):
-        """Carry on the fit of the candidate with the lowest training error
-        while it stops on its iteration budget and still improves
-        (``done`` is updated in place).
-
-        The verdict rests on that candidate, and a needle-narrow minimum
-        (a stiff backlash with a channel delay and the nominal refitted:
-        six parameters, 0.1 % wide) can take more iterations than the
-        budget every other candidate gets.  Measured on the stiff backlash
-        of family d (seed 101): the budget ran out at -97.0 dB of training
-        error, 0.4 % off in mass and stiffness, with the noise at -103 dB.
-        At most ``LEADER_BUDGETS`` more budgets, each at the reporting rate
-        from where the last stopped, and only while a budget gains
-        ``LEADER_PROGRESS_DB`` and the training error is that far above the
-        noise floor (where the data give one before the fits): a fit at the
-        noise has nothing left to gain, and carrying it on cost the
-        benchmark's other cases a third more time.
-        """
-        leader = min((e for e in effects if done[e.name].effect.n_params and done[e.name].refined),
-                     key=lambda e: done[e.name].train_mse, default=None)
-        floor = 0.0 if self.noise_ is None else self.noise_.variance * 10 ** (LEADER_PROGRESS_DB / 10)
-        for _ in range(LEADER_BUDGETS if leader is not None else 0):
-            fit = done[leader.name]
-            if fit.converged or fit.train_mse < floor:
-                return
-            warm = replace(fit.effect, starts=[fit.theta], data_start=None)
-            more = run({leader.name: fit_task(warm, full_rate=True)})[leader.name]
-            gain_db = 10 * np.log10(fit.train_mse / more.train_mse)
-            if gain_db <= 0:
-                return
-            done[leader.name] = replace(more, n_evaluations=fit.n_evaluations + more.n_evaluations,
-                                        seconds=fit.seconds + more.seconds)
-            self._log(f"{leader.name} carried on: training {10 * np.log10(more.train_mse):.2f} dB "
-                      f"({gain_db:.1f} dB better)")
-            if gain_db < LEADER_PROGRESS_DB:
-                return
-
-    def _hidden_delay(self, effects, done, first, fit_task, run, aligned_clues):
-        """Look for a channel delay behind a dominant nonlinearity; the
-        effects as they are now fitted (``done`` is updated in place).
-
-        With a strong nonlinear effect the nominal refit leaves an error the
-        delay barely changes (a backlash at -59 dB hides a delay worth
-        -70 dB), so the first look misses it.  The delay is looked for again
-        on the best candidate: if freeing it gains ``HIDDEN_DELAY_DB`` there,
-        it belongs to the measurement chain and every candidate is
-        refitted with it, from its own fit and from its clues aligned at
-        that delay (with half the iterations: most of them start close).
-        Skipped when the best candidate already sits within
-        ``HIDDEN_DELAY_DB`` of the noise floor: no delay could gain that.
-        """
-        measured = {e.name for e in first}
-        rest = [e for e in effects if e.name not in measured]
-        contenders = [e for e in rest if done[e.name].refined]
-        if not contenders:
-            return effects  # no candidate adds to the nominal's refit: no nonlinearity to hide a delay
-        best = min(contenders, key=lambda e: done[e.name].train_mse)
-        if self.noise_ is not None and done[best.name].train_mse < self.noise_.variance * 10 ** (HIDDEN_DELAY_DB / 10):
-            return effects
-        first_look = done["input_delay"]  # its theta: the delay's (samples), then the refitted nominal's
-        delay_start = first_look.theta[:1]
-
-        def delayed_effect(e, starts=()):
-            # from its fit without the delay (whose listed starts were
-            # tried then: the warm start holds the best of them)
-            d = with_delay(e, make_effect("input_delay"), delay_start)
-            return replace(d, starts=[np.append(done[e.name].theta, delay_start)] + list(starts), data_start=None)
-
-        clues_at = {}  # the clues aligned at each delay (samples), read once for every candidate
-
-        def aligned_starts(e, shifts):
-            # e's data starts from the clues aligned at each delay
-            starts = []
-            for shift in shifts:
-                if shift not in clues_at:
-                    clues_at[shift] = aligned_clues(shift / self.fs)
-                d = with_delay(e, make_effect("input_delay"), [shift])
-                starts += d.data_starts(clues_at[shift], self.nominal, self.scales_)
-            return starts
-
-        # The first look's delay is biased by the nonlinearity it could not
-        # fit: the best candidate's clues are read at several delays (a
-        # start costs one simulation).
-        shifts = sorted({round(float(delay_start[0]), 3), *HIDDEN_DELAY_SHIFTS})
-        trial = run({best.name: fit_task(delayed_effect(best, aligned_starts(best, shifts)))})[best.name]
-        gain_db = 10 * np.log10(done[best.name].train_mse / trial.train_mse)
-        if gain_db < HIDDEN_DELAY_DB:
-            return effects
-        self.delay_ = dict(theta=float(trial.theta[-1]), delay_s=float(trial.physical["delay_s"]),
-                           gain_db=float(gain_db))
-        self._log(f"the data carry a delay of {1e3 * self.delay_['delay_s']:.3g} ms, hidden behind {best.name} "
-                  f"({gain_db:.1f} dB better fit with it); every candidate is refitted with it")
-        found = [self.delay_["theta"]]
-        refits = {e.name: fit_task(delayed_effect(e, aligned_starts(e, found)), max_nfev=max(3, self.max_nfev // 2))
-                  for e in rest if e is not best}
-        done[best.name] = trial
-        done.update(run(refits))
-        # the effects as refitted, the delay free in each
-        return [e if e.name in measured else done[e.name].effect for e in effects]
 
     def _warn_if_periodic(self, u_list):
         """Warn when the training inputs repeat themselves and no period was
@@ -698,7 +380,7 @@ class GapDiagnosis(BaseEstimator):
         state differs from its simulation from rest by the start-up
         transient ``d``; the measurement holds it (as a steady-state record
         does) when the misfit from rest projects onto ``d`` with a
-        coefficient of at least ``STEADY_STATE_SHARE`` and ``d`` is not
+        coefficient of at least ``SETTINGS.steady_state_share`` and ``d`` is not
         negligible (a tenth of the misfit's power).  A record from rest
         projects near zero: the model's other errors do not ring like its
         own free response.
@@ -711,7 +393,7 @@ class GapDiagnosis(BaseEstimator):
             d, r = y_steady - y_rest, y - y_rest
             d, r = d - d.mean(), r - r.mean()
             power_d, power_r = d @ d, r @ r
-            if power_d > 0.1 * power_r and r @ d > STEADY_STATE_SHARE * power_d:
+            if power_d > 0.1 * power_r and r @ d > SETTINGS.steady_state_share * power_d:
                 suspects.append(i)
         if suspects:
             sizes = sorted({u_list[i].size for i in suspects})
@@ -738,17 +420,17 @@ class GapDiagnosis(BaseEstimator):
         """The fitted candidate's simulation of ``signals`` (at ``theta``,
         default its fitted one); None where it diverges or is not physical."""
         try:
-            osc, transform, _ = effect_model(fit.effect, fit.theta if theta is None else theta, self.nominal,
-                                             self.scales_)
+            osc, transform, _ = fit.effect.simulator(fit.theta if theta is None else theta, self.nominal,
+                                                     self.scales_)
             return simulate_signals(osc, signals, transform)
         except (ValueError, FloatingPointError):
             return None
 
-    def _simulate_fits(self, signals):
-        """Every fitted candidate's simulation of ``signals``, in parallel
-        threads (None for one that diverges)."""
+    def _simulate_fits(self, signals, fits=None):
+        """Every fitted candidate's (or ``fits``') simulation of
+        ``signals``, in parallel threads (None for one that diverges)."""
         return Parallel(n_jobs=self.n_jobs, prefer="threads")(
-            delayed(self._simulate_fit)(f, signals) for f in self.fits_)
+            delayed(self._simulate_fit)(f, signals) for f in (self.fits_ if fits is None else fits))
 
     def _black_box_predict(self, u):
         """The black box's simulation of one signal; None where it leaves its
@@ -761,7 +443,7 @@ class GapDiagnosis(BaseEstimator):
     def _sensitive_signals(self, decision, val, y_effects, noise):
         """Validation signals the best candidate cannot pin down: with its
         parameters drawn from what the training data determine (their
-        covariance, :func:`parameter_covariance`; ``SENSITIVITY_DRAWS``
+        covariance, :func:`parameter_covariance`; ``SETTINGS.sensitivity_draws``
         draws), its simulation moves by more than the noise on average.
 
         A strongly nonlinear response can be chaotic or pass a jump (several
@@ -787,7 +469,7 @@ class GapDiagnosis(BaseEstimator):
         rng = check_random_state(self.random_state)
         lower, upper = fit.effect.bounds
         draws = [np.clip(rng.multivariate_normal(fit.theta, cov, check_valid="ignore"), lower, upper)
-                 for _ in range(SENSITIVITY_DRAWS)]
+                 for _ in range(SETTINGS.sensitivity_draws)]
         moved = Parallel(n_jobs=self.n_jobs, prefer="threads")(
             delayed(self._simulate_fit)(fit, val, theta) for theta in draws)
         moved = [m for m in moved if m is not None]
@@ -810,9 +492,11 @@ class GapDiagnosis(BaseEstimator):
     def _recalibrated(self, decision):
         """Relative change of each freed nominal parameter in the chosen
         candidate's fit (``recalibration`` included: the verdict says which
-        parameter was off), and the channel delay fitted with it, in
-        seconds; empty when nothing was freed."""
-        chosen = next((f for f in self.fits_ if f.effect.name == decision.best_effect), None)
+        parameter was off; the last added effect's combination when effects
+        were added), and the channel delay fitted with it, in seconds;
+        empty when nothing was freed."""
+        name = decision.added_effects[-1].name if decision.added_effects else decision.best_effect
+        chosen = next((f for f in self.fits_ + self.combinations_ if f.effect.name == name), None)
         if chosen is None:
             return {}
         moved = self._nominal_moves(chosen)
@@ -852,8 +536,9 @@ class GapDiagnosis(BaseEstimator):
             # on these signals is the yardstick.
             grid = self.period_ or max(u.size for u in self._train[0])
             noise = residual_noise(y_list, y_black_box, grid)
+        y_combinations = self._simulate_fits(val, self.combinations_)
         decision = decide(self.fits_, y_list, y_nominal, y_effects, y_black_box, noise, self.significance,
-                          self.offsets)
+                          self.offsets, self.combinations_, y_combinations)
         sensitive = self._sensitive_signals(decision, val, y_effects, noise)
         if sensitive:
             keep = [i for i in range(len(u_list)) if i not in sensitive]
@@ -862,7 +547,8 @@ class GapDiagnosis(BaseEstimator):
                 return None if signals is None else [signals[i] for i in keep]
 
             decision = decide(self.fits_, pick(y_list), pick(y_nominal), [pick(y) for y in y_effects],
-                              pick(y_black_box), noise, self.significance, self.offsets)
+                              pick(y_black_box), noise, self.significance, self.offsets, self.combinations_,
+                              [pick(y) for y in y_combinations])
             decision.sensitive_signals = sensitive
         decision.recalibrated = self._recalibrated(decision)
         u_train, y_train = self._train

@@ -2,11 +2,9 @@
 import numpy as np
 
 from .verdict.decision import percent
+from .settings import SETTINGS
 
-__all__ = ["GapReport", "RECALIBRATION_SHOWN"]
-
-#: Smallest relative change of a freed nominal parameter the verdict names.
-RECALIBRATION_SHOWN = 0.005
+__all__ = ["GapReport"]
 
 
 def _plain(x):
@@ -73,6 +71,13 @@ class GapReport:
     where : dict
         Frequency, amplitude, state-plane and time analyses (see
         :func:`sklearn_pnlss.gap.where.locate_gap`).
+    main_effect : str or None
+        The best candidate (or the one preferred within the noise), named
+        also when it leaves part of the gap unexplained.
+    added_effects : list of str
+        Effects added to the main one by forward selection, each because
+        it closes more of the gap on validation (see
+        :func:`sklearn_pnlss.gap.stages.added_effects`).
     reason : str
         One sentence behind the verdict.
     unsettled_signals : list of int
@@ -97,6 +102,8 @@ class GapReport:
         self.noise_source = decision.noise_source
         self.noise_detail = decision.noise_detail
         self.reason = decision.reason
+        self.main_effect = decision.main_effect
+        self.added_effects = list(decision.added_names)
         self.unsettled_signals = list(unsettled)
         self.black_box = None
         if black_box is not None:
@@ -108,7 +115,8 @@ class GapReport:
     def to_dict(self):
         """Everything in the report as plain JSON-ready types."""
         return _plain(dict(
-            best_effect=self.best_effect, significant=self.significant, explained=self.explained,
+            best_effect=self.best_effect, main_effect=self.main_effect, added_effects=self.added_effects,
+            significant=self.significant, explained=self.explained,
             p_value=self.p_value, reason=self.reason, gap_db=self.gap_db,
             per_signal_gap_db=self.decision.per_signal_before_db, noise_floor_db=self.noise_floor_db,
             noise_source=self.noise_source, noise_detail=self.noise_detail,
@@ -120,7 +128,8 @@ class GapReport:
     def __str__(self):
         lines = ["Sim-to-real gap diagnosis", "=" * 25]
         verdict = {None: "no significant gap", "unexplained": "gap not explained by any candidate"}
-        lines.append(f"verdict: {verdict.get(self.best_effect, self.best_effect)}{self.recalibration_text()}")
+        added = f", with {', '.join(self.added_effects)} added" if self.added_effects and self.explained else ""
+        lines.append(f"verdict: {verdict.get(self.best_effect, self.best_effect)}{added}{self.recalibration_text()}")
         lines.append(f"  {self.reason}")
         if np.isfinite(self.noise_floor_db):
             lines.append(f"nominal gap {self.gap_db:.2f} dB, noise floor {self.noise_floor_db:.2f} dB"
@@ -149,12 +158,16 @@ class GapReport:
             for i, b in enumerate(self.black_box["branches"]):
                 lines.append(f"  branch {i + 1}: {b['reading']}")
         lines.append("")
-        lines.append(f"{'candidate':<22}{'params':>7}{'after dB':>10}{'shrink dB':>11}{'closure':>9}")
-        for r in self.ranking:
+        rows = self.ranking + self.decision.added_effects
+        width = max([22] + [len(r.name) + 2 for r in rows])
+        lines.append(f"{'candidate':<{width}}{'params':>7}{'after dB':>10}{'shrink dB':>11}{'closure':>9}")
+        for r in rows:
             shrink = _number(r.shrink_db, width=11) if np.isfinite(r.gap_after_db) else f"{'-':>11}"
-            lines.append(f"{r.name:<22}{r.n_params:>7}{_number(r.gap_after_db, width=10)}{shrink}"
+            lines.append(f"{r.name:<{width}}{r.n_params:>7}{_number(r.gap_after_db, width=10)}{shrink}"
                          f"{_percent(r.closure, width=9)}")
         best = next((r for r in self.ranking if r.name == self.best_effect), None)
+        if best is not None and self.decision.added_effects and self.explained:
+            best = self.decision.added_effects[-1]
         if best is not None:
             params = ", ".join(f"{k} = {v:.4g}" for k, v in best.params.items())
             lines.append(f"\n{best.name}: {params}")
@@ -185,7 +198,7 @@ class GapReport:
         parameters, e.g. ``", with stiffness recalibrated by -8 %"``
         (changes under half a percent are not named)."""
         moved = {k: v for k, v in self.decision.recalibrated.items()
-                 if k != "delay_s" and abs(v) >= RECALIBRATION_SHOWN}
+                 if k != "delay_s" and abs(v) >= SETTINGS.recalibration_shown}
         parts = [f"{name} by {100 * v:+.0f} %" if abs(v) >= 0.01 else f"{name} by {100 * v:+.1f} %"
                  for name, v in moved.items()]
         if parts:

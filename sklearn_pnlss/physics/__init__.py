@@ -13,6 +13,7 @@ from .forces import (
     ForceElement,
     QuadraticDamping,
     QuadraticStiffness,
+    SeriesDamper,
     StiffnessDrift,
 )
 from .oscillator import FineSimulation, Oscillator, band_limited_noise
@@ -30,6 +31,7 @@ __all__ = [
     "Oscillator",
     "QuadraticDamping",
     "QuadraticStiffness",
+    "SeriesDamper",
     "StiffnessDrift",
     "band_limited_noise",
     "decimate_fir",

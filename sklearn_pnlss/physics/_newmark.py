@@ -35,6 +35,7 @@ from .forces import (
     KIND_DEAD_ZONE_SPRING,
     KIND_QUADRATIC_DAMPING,
     KIND_QUADRATIC_STIFFNESS,
+    KIND_SERIES_DAMPER,
     KIND_STIFFNESS_DRIFT,
 )
 
@@ -147,6 +148,23 @@ def _coupled_mass_rate(p, o, y, yd, z, a, g, dgdy, dgdyd, dgdz):
 
 
 @njit(**_INLINE)
+def _series_damper_force(p, o, y, yd, z, a, dfdz):
+    ks = p[o + 1]
+    dfdz[a] = -ks
+    return ks * (y - z[a]), ks, 0.0
+
+
+@njit(**_INLINE)
+def _series_damper_rate(p, o, y, yd, z, a, g, dgdy, dgdyd, dgdz):
+    # the massless node: the spring's force drives the damper
+    relax = p[o + 1] / p[o]
+    g[a] = relax * (y - z[a])
+    dgdy[a] = relax
+    dgdyd[a] = 0.0
+    dgdz[a, a] = -relax
+
+
+@njit(**_INLINE)
 def _drift_force(p, o, y, yd, z, a, dfdz):
     # z[a] is the clock: the stiffness is k + rate * t.
     dfdz[a] = p[o] * y
@@ -192,6 +210,8 @@ def _force(kind, p, o, end, y, yd, z, a, dfdz):
         return _coupled_mass_force(p, o, y, yd, z, a, dfdz)
     elif kind == KIND_STIFFNESS_DRIFT:
         return _drift_force(p, o, y, yd, z, a, dfdz)
+    elif kind == KIND_SERIES_DAMPER:
+        return _series_damper_force(p, o, y, yd, z, a, dfdz)
     elif kind == KIND_CUSTOM:
         # a user's function sees its own parameters only
         return custom_force(int(p[o]), p[o + 1:end], y, yd)
@@ -207,6 +227,8 @@ def _rate(kind, p, o, y, yd, z, a, b, g, dgdy, dgdyd, dgdz):
         _coupled_mass_rate(p, o, y, yd, z, a, g, dgdy, dgdyd, dgdz)
     elif kind == KIND_STIFFNESS_DRIFT:
         _clock_rate(p, o, y, yd, z, a, g, dgdy, dgdyd, dgdz)
+    elif kind == KIND_SERIES_DAMPER:
+        _series_damper_rate(p, o, y, yd, z, a, g, dgdy, dgdyd, dgdz)
     else:
         for j in range(a, b):
             g[j] = np.nan
@@ -265,6 +287,12 @@ def _dparams(kind, p, o, end, y, yd, z, a, b, dfdp, dgdp):
         dgdp[a + 1, o + 2] = stretch / m2
     elif kind == KIND_STIFFNESS_DRIFT:
         dfdp[o] = z[a] * y
+    elif kind == KIND_SERIES_DAMPER:
+        cs, ks = p[o], p[o + 1]
+        stretch = y - z[a]
+        dfdp[o + 1] = stretch
+        dgdp[a, o] = -ks * stretch / (cs * cs)
+        dgdp[a, o + 1] = stretch / cs
     else:
         for i in range(o, end):
             dfdp[i] = np.nan

@@ -27,6 +27,7 @@ KIND_DEAD_ZONE_SPRING = 6
 KIND_COUPLED_MASS = 7
 KIND_STIFFNESS_DRIFT = 8
 KIND_CUSTOM = 9
+KIND_SERIES_DAMPER = 10
 
 __all__ = [
     "ForceElement",
@@ -38,6 +39,7 @@ __all__ = [
     "DeadZoneSpring",
     "CoupledMass",
     "StiffnessDrift",
+    "SeriesDamper",
     "CustomForce",
 ]
 
@@ -369,6 +371,46 @@ class StiffnessDrift(ForceElement):
 
     def parameters(self):
         return np.array([self.rate])
+
+
+class SeriesDamper(ForceElement):
+    r"""A spring and a damper in series between the mass and the ground (a
+    Maxwell element: a viscoelastic mount, a rubber isolator).
+
+    .. math:: F = k_s (y - w), \qquad c_s \dot w = k_s (y - w)
+
+    The internal state is ``w``, the displacement of the massless node
+    between the spring and the damper.  Slow motion relaxes through the
+    damper (no static stiffness); fast motion meets the spring: the
+    element stiffens and damps most near its relaxation frequency
+    :math:`k_s / (2 \pi c_s)`.
+
+    Parameters
+    ----------
+    cs : float
+        Damping of the damper, N s/m (> 0).
+    ks : float
+        Stiffness of the spring, N/m (>= 0).
+
+    Examples
+    --------
+    >>> from sklearn_pnlss.physics import SeriesDamper
+    >>> SeriesDamper(200.0, 1e4).n_states
+    1
+    """
+
+    kind = KIND_SERIES_DAMPER
+    n_states = 1
+    param_names = ("cs", "ks")
+
+    def __init__(self, cs, ks):
+        self.cs = _check_positive("cs", cs)
+        self.ks = _check_finite_real("ks", ks)
+        if self.ks < 0:
+            raise ValueError(f"ks must be >= 0, got {ks!r}.")
+
+    def parameters(self):
+        return np.array([self.cs, self.ks])
 
 
 class CustomForce(ForceElement):

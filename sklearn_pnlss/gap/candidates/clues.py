@@ -19,11 +19,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from ...physics import DeadZoneSpring, Oscillator
+from ...physics import Oscillator
+from .effect import recalibration_unit
 from .stiffness_start import measured_stiffness_change
 from ..where import content_limit, missing_force
 
-__all__ = ["DataClues", "read_clues", "backlash_start", "backlash_spring", "force_law_start", "LINEAR_COLUMNS"]
+__all__ = ["DataClues", "read_clues", "backlash_start", "force_law_start"]
 
 
 @dataclass
@@ -56,19 +57,16 @@ def read_clues(nominal, u_list, y_list, y_nominal, n_periods, period, fs):
     return DataClues(change, y, v, a, f)
 
 
-#: The missing force per unit change of each recalibrated nominal parameter
-#: (see :func:`sklearn_pnlss.gap.candidates.effects.recalibration_effect`: mass
-#: ``m (1 + t)``, damping ``c + t F / V``, stiffness ``k + t F / Y``).
-LINEAR_COLUMNS = {
-    "mass": lambda clues, nominal, s: nominal.mass * clues.acceleration,
-    "damping": lambda clues, nominal, s: s.force / s.velocity * clues.velocity,
-    "stiffness": lambda clues, nominal, s: s.stiffness * clues.displacement,
-}
+#: The measured motion each recalibrated nominal parameter's change acts on
+#: (its force per unit change is this times
+#: :func:`~sklearn_pnlss.gap.candidates.effect.recalibration_unit`).
+_MOTION_OF = {"mass": "acceleration", "damping": "velocity", "stiffness": "displacement"}
 
 
 def _linear_columns(clues, nominal, scales, free):
-    """The :data:`LINEAR_COLUMNS` of the freed nominal parameters, in order."""
-    return [LINEAR_COLUMNS[name](clues, nominal, scales) for name in free]
+    """The missing force per unit ``theta`` of each freed nominal parameter
+    (``free``, in order)."""
+    return [recalibration_unit(name, nominal, scales) * getattr(clues, _MOTION_OF[name]) for name in free]
 
 
 #: Relative changes of the mass around a joint start's own at which the start
@@ -125,7 +123,7 @@ def force_law_start(clues, force_law, nominal, scales, free=()):
     scales : Scales
     free : sequence of str
         Nominal parameters refitted with the effect, in the order of their
-        ``theta`` (keys of :data:`LINEAR_COLUMNS`).
+        ``theta`` (among :data:`~sklearn_pnlss.gap.candidates.effect.NOMINAL_PARAMETERS`).
 
     Returns
     -------
@@ -155,22 +153,15 @@ def _force_law_solve(clues, force_law, nominal, scales, free):
     return (np.linalg.lstsq(A / norms, clues.force, rcond=None)[0] / norms)[:-1]
 
 
-def backlash_spring(kb, gap, displacement):
-    """The dead-zone spring of the ``backlash`` candidate: its corners
-    rounded over a twentieth of the clearance (of a thousandth of the
-    displacement scale ``displacement`` at least)."""
-    return DeadZoneSpring(kb, gap, max(gap, 1e-3 * displacement) / 20)
-
-
-def backlash_start(clues, scales, n_grid=200, nominal=None, free=()):
+def backlash_start(clues, scales, spring, n_grid=200, nominal=None, free=()):
     """``theta = (kb, gap)`` of a dead-zone spring fitted to the missing
     force, followed by the ``theta`` of the freed nominal parameters
-    (``free``, see :data:`LINEAR_COLUMNS`).
+    (``free``, see :func:`_linear_columns`).
 
     For each clearance on a grid up to the largest displacement the spring
     rate (and the nominal errors) follow by linear least squares; the best
     clearance is then refined between its grid neighbours with the
-    candidate's own rounded spring (:func:`backlash_spring`).  The grid
+    candidate's own rounded ``spring(kb, gap, displacement_scale)``.  The grid
     alone leaves the clearance off by up to half a step (0.5 % of a 2.5 mm
     gap), where a stiff spring's jumping response has a simulation error
     20 dB above the noise and a needle-shaped minimum the simulation fit
@@ -182,15 +173,15 @@ def backlash_start(clues, scales, n_grid=200, nominal=None, free=()):
     if clues.force is None:
         return None
     grid = np.linspace(0.0, np.max(np.abs(clues.displacement)), n_grid, endpoint=False)
-    theta = _backlash_solve(clues, scales, nominal, free, grid)
+    theta = _backlash_solve(clues, scales, spring, nominal, free, grid)
     if theta is None:
         return None
     near = grid[np.abs(grid - theta[1] * scales.displacement) <= 3.5 * grid[1]]
     return _along_mass(theta, 2, clues, nominal, free,
-                       lambda clues, free: _backlash_solve(clues, scales, nominal, free, near))
+                       lambda clues, free: _backlash_solve(clues, scales, spring, nominal, free, near))
 
 
-def _backlash_solve(clues, scales, nominal, free, grid):
+def _backlash_solve(clues, scales, spring, nominal, free, grid):
     """:func:`backlash_start`'s solve over the evenly spaced clearances
     ``grid``, refined between the best one's neighbours."""
     y, f = clues.displacement, clues.force
@@ -202,8 +193,8 @@ def _backlash_solve(clues, scales, nominal, free, grid):
         return coef, np.sum((f - A @ coef) ** 2)
 
     def rounded(gap):
-        spring = Oscillator(1.0, 0.0, 0.0, forces=(backlash_spring(1.0, gap, scales.displacement),))
-        return spring.restoring_force(y, np.zeros_like(y))
+        unit = Oscillator(1.0, 0.0, 0.0, forces=(spring(1.0, gap, scales.displacement),))
+        return unit.restoring_force(y, np.zeros_like(y))
 
     best_gap, best_cost = None, np.sum((f - linear @ np.linalg.lstsq(linear, f, rcond=None)[0]) ** 2)
     for gap in grid:

@@ -18,6 +18,7 @@ import numpy as np
 
 from ...frequency.bla import periodic_bla
 from ...utils.validation import is_periodic
+from .effect import recalibration_unit
 
 __all__ = ["StiffnessChange", "measured_stiffness_change", "second_mode_start", "second_mode_joint_start",
            "recalibration_start"]
@@ -111,12 +112,11 @@ def second_mode_start(change, nominal, bounds, n_grid=400):
 
 def _recalibration_basis(change, nominal, scales, free=("mass", "damping", "stiffness")):
     """The stiffness change per unit ``theta`` of each freed nominal
-    parameter: ``-w^2 m``, ``i w F / V``, ``F / Y`` (see
-    :func:`~sklearn_pnlss.gap.candidates.effects.recalibration_effect`)."""
-    columns = {"mass": -change.omega**2 * nominal.mass,
-               "damping": 1j * change.omega * scales.force / scales.velocity,
-               "stiffness": np.full(change.omega.shape, scales.stiffness, complex)}
-    return np.stack([columns[name] for name in free], axis=1) if free else np.zeros((change.omega.size, 0))
+    parameter: ``-w^2``, ``i w`` and 1 times its
+    :func:`~sklearn_pnlss.gap.candidates.effect.recalibration_unit`."""
+    per_unit = {"mass": -change.omega**2, "damping": 1j * change.omega, "stiffness": np.ones(change.omega.shape)}
+    columns = [per_unit[name] * recalibration_unit(name, nominal, scales) for name in free]
+    return np.stack(columns, axis=1).astype(complex) if free else np.zeros((change.omega.size, 0))
 
 
 def _weighted_solve(change, basis):

@@ -13,35 +13,15 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..candidates.effects import Effect
 from .simulate import FIT_MAX_PERIODS, misfit, simulate_sensitivities, simulate_signals
+from ..settings import SETTINGS
 
-__all__ = ["EffectFit", "with_recalibration", "with_delay", "meaningful_ftol", "fit_effect", "refine_fit", "at_rate",
-           "effect_model", "parameter_covariance"]
+__all__ = ["EffectFit", "meaningful_ftol", "fit_effect", "refine_fit", "at_rate", "parameter_covariance"]
 
 # Residual given to a trial point that diverges or is not physical, relative
 # to the displacement scale: far above any real misfit.
 _PENALTY = 1e3
 _FD_STEP = 1e-5
-#: Training error at the reporting rate over the defect-corrected coarse
-#: one above which the fit is refined at the reporting rate (3 dB).
-FINE_MISMATCH = 2.0
-#: Defect corrections at most, each carrying the model's discretisation error
-#: at the latest estimate (see :func:`fit_effect`).
-DEFECT_ROUNDS = 3
-#: Data starts (the best at the coarse rate) tried again at the reporting rate.
-FINE_DATA_STARTS = 3
-#: Data starts kept (the best on the first training signal) for a full
-#: evaluation when an effect lists more: a profile gives dozens, each a
-#: simulation of every signal, and on one signal they rank alike.
-SCREENED_STARTS = 4
-#: A training signal whose misfit is this many times the median signal's
-#: (10 dB) has jumped to another steady state, one whose sensitivity is that
-#: many times makes the misfit a needle (see :func:`_refit_without_outliers`).
-JUMP_RATIO = 10.0
-#: A fit that stops on its budget within this many dB of the noise is
-#: looked at for a needle signal (see :func:`_refit_without_outliers`).
-NEEDLE_REACH_DB = 10.0
 
 
 @dataclass
@@ -90,92 +70,6 @@ class EffectFit:
     coarse_mse: float = None
 
 
-def _then(first, second):
-    """Two input transforms (either may be None) applied one after the other."""
-    if first is None or second is None:
-        return second if first is None else first
-
-    def both(u, fs, periodic):
-        return second(first(u, fs, periodic), fs, periodic)
-    return both
-
-
-def _combined(effect, extra, extra_start, data_start):
-    """The effect with ``extra``'s parameters appended to its ``theta``
-    (starting at ``extra_start``): the forces of both, the linear changes of
-    both, the effect's input transform then the extra's, and both sets of
-    physical values.  ``theta`` is split by the effect's own fitted
-    parameters (its bounds), not by the parameters it reports: an effect may
-    report more or fewer."""
-    n = effect.bounds[0].size
-
-    def build(theta, nominal, scales):
-        forces, linear, transform, physical = effect.build(theta[:n], nominal, scales)
-        x_forces, x_linear, x_transform, x_physical = extra.build(theta[n:], nominal, scales)
-        return (tuple(forces) + tuple(x_forces), {**linear, **x_linear}, _then(transform, x_transform),
-                {**physical, **x_physical})
-
-    starts = [np.concatenate([s, extra_start]) for s in effect.starts]
-    bounds = (np.concatenate([effect.bounds[0], extra.bounds[0]]),
-              np.concatenate([effect.bounds[1], extra.bounds[1]]))
-    return Effect(effect.name, effect.param_names + extra.param_names, starts, bounds, build,
-                  effect.description, effect.is_recalibration, data_start)
-
-
-def with_recalibration(effect, recalibration):
-    """The effect with the nominal parameters that ``recalibration`` refits
-    (see :func:`~sklearn_pnlss.gap.candidates.effects.recalibration_effect`) free too.
-
-    Its ``theta`` is the effect's own followed by the recalibration's; the
-    report reads the recalibrated values beside the effect's.
-    """
-    n = effect.bounds[0].size
-    free = recalibration.param_names
-
-    def data_start(clues, nominal, scales, bounds):
-        # the effect's own data start (or its first listed one) with the
-        # nominal parameters as the stiffness change suggests
-        own = effect.data_starts(clues, nominal, scales) or effect.starts[:1]
-        recal = recalibration.data_starts(clues, nominal, scales) or recalibration.starts[:1]
-        starts = [np.concatenate([own[0], recal[0]])]
-        if effect.joint_start is not None:
-            # effect and nominal errors together, from the missing force,
-            # with all the freed parameters and with fewer: the mass error
-            # is the worst determined (a strong nonlinearity's harmonics
-            # beyond the derivatives' band leak into it), and the
-            # simulation error picks among the starts
-            for subset in dict.fromkeys((free, tuple(p for p in free if p != "mass"), ())):
-                joint = effect.joint_start(clues, nominal, scales, subset)
-                for row in [] if joint is None else np.atleast_2d(joint):  # a joint start may give several
-                    theta = np.zeros(n + len(free))
-                    theta[:n] = row[:n]
-                    theta[[n + free.index(p) for p in subset]] = row[n:]
-                    starts.append(theta)
-        return np.array(starts)
-
-    return _combined(effect, recalibration, recalibration.starts[0], data_start)
-
-
-def with_delay(effect, delay, start):
-    """The effect with a channel delay free too (``delay`` is the
-    ``input_delay`` effect, ``start`` its fitted ``theta``): the delay of
-    the measurement chain is fitted with every candidate once found."""
-    def data_start(clues, nominal, scales, bounds):
-        own = effect.data_starts(clues, nominal, scales)
-        return np.array([np.append(t, start) for t in own]) if own else None
-
-    return _combined(effect, delay, np.atleast_1d(start), data_start)
-
-
-def effect_model(effect, theta, nominal, scales):
-    """The nominal oscillator with the effect added: ``(oscillator,
-    input transform, physical parameters)``; raises ValueError when the
-    parameters are not physical."""
-    forces, linear, transform, physical = effect.build(np.asarray(theta, float), nominal, scales)
-    osc = nominal.with_forces(nominal.forces + tuple(forces), **linear)
-    return osc, transform, physical
-
-
 class _Objective:
     """Residuals of one effect on the training set, counting simulations."""
 
@@ -197,7 +91,7 @@ class _Objective:
         self.n_evaluations += 1
         states = []
         try:
-            osc, transform, _ = effect_model(self.effect, theta, self.nominal, self.scales)
+            osc, transform, _ = self.effect.simulator(theta, self.nominal, self.scales)
             y_sim = simulate_signals(osc, self.signals, transform, max_periods=FIT_MAX_PERIODS,
                                      max_abs=self.max_abs, steady_states=states)
         except (ValueError, FloatingPointError, ZeroDivisionError):
@@ -239,7 +133,7 @@ class _Objective:
         the input transform (a delay, a saturation level) and is differenced
         by simulation.  None where the recursion does not apply."""
         try:
-            osc, transform, _ = effect_model(self.effect, theta, self.nominal, self.scales)
+            osc, transform, _ = self.effect.simulator(theta, self.nominal, self.scales)
             physical = _physical_derivatives(self.effect, theta, osc, self.nominal, self.scales, upper)
             if physical is None or osc.time_varying:
                 return None
@@ -277,7 +171,7 @@ def _physical_derivatives(effect, theta, osc, nominal, scales, upper):
         step = _step(theta, i, upper)
         t = theta.copy()
         t[i] += step
-        moved = effect_model(effect, t, nominal, scales)[0].parameter_vector
+        moved = effect.simulator(t, nominal, scales)[0].parameter_vector
         if moved.size != base.size:
             return None
         out[:, i] = (moved - base) / step
@@ -317,7 +211,7 @@ def per_signal_mse(r, y_meas):
     return np.array([np.mean(part**2) for part in _by_signal(r, y_meas)])
 
 
-def outlying_signals(values, ratio=JUMP_RATIO):
+def outlying_signals(values, ratio=SETTINGS.jump_ratio):
     """Indices of the training signals whose ``values`` (a misfit, a
     sensitivity) are ``ratio`` times the median signal's or more (empty
     with fewer than three signals: no median to compare with)."""
@@ -337,13 +231,13 @@ def per_signal_sensitivity(J, y_meas):
 
 def stalled_near_noise(converged, mse, noise_variance):
     """Whether a fit stopped on its budget with its misfit ``mse`` within
-    ``NEEDLE_REACH_DB`` of the noise: the one case where a needle signal
+    ``SETTINGS.needle_reach_db`` of the noise: the one case where a needle signal
     may hold it back.  A fit far above the noise misses structure, which
     leaving a signal out cannot supply (and the sensitivity's simulations
     would only cost time: 152 -> 304 s on a clean stiff backlash when every
     stopped fit was tried).  Without a noise estimate there is no gate."""
     return bool(not converged and noise_variance is not None
-                and mse <= noise_variance * 10 ** (NEEDLE_REACH_DB / 10))
+                and mse <= noise_variance * 10 ** (SETTINGS.needle_reach_db / 10))
 
 
 def _refit_without_outliers(obj, theta, r, stalled, lower, upper, max_nfev, ftol):
@@ -438,12 +332,12 @@ def _defect_corrected(obj, fine_signals, theta, lower, upper, max_nfev, ftol):
     standard errors off in damping after it (its sweep's jump 8 dB above
     the noise); a second round lands on the fine-rate optimum.  Rounds stop
     when one lowers the cost by less than ``ftol`` (its start is then the
-    fine optimum to the noise) or after ``DEFECT_ROUNDS``.  The objective
+    fine optimum to the noise) or after ``SETTINGS.defect_rounds``.  The objective
     returned is the last round's (``obj`` if none could run).
     """
     plain, n_used, solved = obj.signals.without_correction(), 0, None
-    for _ in range(DEFECT_ROUNDS):
-        osc, transform, _ = effect_model(obj.effect, theta, obj.nominal, obj.scales)
+    for _ in range(SETTINGS.defect_rounds):
+        osc, transform, _ = obj.effect.simulator(theta, obj.nominal, obj.scales)
         try:
             fine = simulate_signals(osc, fine_signals, transform)
             corrected = obj.signals.with_correction(
@@ -462,14 +356,14 @@ def _defect_corrected(obj, fine_signals, theta, lower, upper, max_nfev, ftol):
 
 def _start_costs(obj, starts, n_listed):
     """Training cost of each start: the ``n_listed`` listed starts and the
-    ``SCREENED_STARTS`` data starts best on the first training signal are
+    ``SETTINGS.screened_starts`` data starts best on the first training signal are
     evaluated on all of them, the others get infinity."""
     n_signals = len(obj.y_meas)
-    if len(starts) - n_listed <= SCREENED_STARTS or n_signals < 2:
+    if len(starts) - n_listed <= SETTINGS.screened_starts or n_signals < 2:
         return np.array([np.sum(obj(s) ** 2) for s in starts])
     screen = obj.subset([0])
     first = [np.sum(screen(s) ** 2) for s in starts[n_listed:]]
-    kept = list(range(n_listed)) + [n_listed + int(i) for i in np.argsort(first)[:SCREENED_STARTS]]
+    kept = list(range(n_listed)) + [n_listed + int(i) for i in np.argsort(first)[:SETTINGS.screened_starts]]
     costs = np.full(len(starts), np.inf)
     costs[kept] = [np.sum(obj(starts[i]) ** 2) for i in kept]
     obj.n_evaluations += -(-screen.n_evaluations // n_signals)  # in simulations of the whole set
@@ -506,7 +400,7 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
         :func:`~sklearn_pnlss.gap.fitting.simulate.misfit`).
     noise_variance : float, default=None
         The measured output's noise variance, m^2, where the data give it:
-        a fit that stops on its budget within ``NEEDLE_REACH_DB`` of it is
+        a fit that stops on its budget within ``SETTINGS.needle_reach_db`` of it is
         looked at for a signal that stalls it (see
         :func:`_refit_without_outliers`).  One far above the noise misses
         structure, which leaving a signal out cannot supply (on the
@@ -531,7 +425,7 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
             theta, cost = starts[int(np.argmin(costs))], float(np.min(costs))
     coarse_mse = cost / obj.size * scales.displacement**2
     n_evaluations = obj.n_evaluations
-    best_data_starts = [data_starts[i] for i in np.argsort(costs[len(effect.starts):])[:FINE_DATA_STARTS]
+    best_data_starts = [data_starts[i] for i in np.argsort(costs[len(effect.starts):])[:SETTINGS.fine_data_starts]
                         if np.isfinite(costs[len(effect.starts) + i])]
     if effect.n_params and fine_signals is not None and signals.correction is not None:
         obj, theta, n_used, solved = _defect_corrected(obj, fine_signals, theta, lower, upper, max_nfev, ftol)
@@ -545,7 +439,7 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
         fine_starts = [theta] + best_data_starts
         fine_costs = [np.sum(fine_obj(t) ** 2) for t in fine_starts]
         best = int(np.argmin(fine_costs))
-        if best > 0 or fine_costs[0] > FINE_MISMATCH * coarse_cost:
+        if best > 0 or fine_costs[0] > SETTINGS.fine_mismatch * coarse_cost:
             # The coarse rate's correction no longer holds: a strong
             # nonlinearity whose steady state (or a sweep's jump) depends on
             # the integration rate settles on another branch at each rate,
@@ -564,7 +458,7 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
         converged, message = refit or (converged, message)
         n_evaluations += n_used
     mse = float(np.mean(r**2)) * scales.displacement**2
-    _, _, physical = effect_model(effect, theta, nominal, scales)
+    _, _, physical = effect.simulator(theta, nominal, scales)
     return EffectFit(effect, theta, physical, mse, n_evaluations, bool(converged), str(message),
                      time.perf_counter() - start, best_data_starts,
                      refined=fine_signals is not None or signals.correction is None, coarse_mse=coarse_mse)
@@ -586,8 +480,7 @@ def refine_fit(fit, nominal, scales, signals, y_meas, *, fine_signals, clues=Non
     as :func:`fit_effect` does in one go.  The simulations and the time
     are those of both stages."""
     best = np.array(fit.data_starts) if fit.data_starts else None
-    warm = replace(fit.effect, starts=[fit.theta], data_start=None if best is None else (lambda *_: best),
-                   joint_start=None)
+    warm = fit.effect.variant(starts=[fit.theta], data_starts=[] if best is None else best)
     more = fit_effect(warm, nominal, scales, signals, y_meas, fine_signals=fine_signals, clues=clues, **kwargs)
     return replace(more, effect=fit.effect, n_evaluations=fit.n_evaluations + more.n_evaluations,
                    seconds=fit.seconds + more.seconds, coarse_mse=fit.coarse_mse)

@@ -4,8 +4,8 @@ The rules, in order:
 
 1. **Is there a gap?**  The nominal simulation error is tested against the
    noise floor (chi-square with the noise's effective degrees of freedom,
-   Bonferroni over signals) and must also exceed it by ``MIN_EXCESS_DB``
-   (``ESTIMATED_FLOOR_MIN_EXCESS_DB`` when the floor is a model's residual):
+   Bonferroni over signals) and must also exceed it by ``SETTINGS.min_excess_db``
+   (``SETTINGS.estimated_floor_min_excess_db`` when the floor is a model's residual):
    otherwise the answer is ``None``.
 2. **Closure.**  Each candidate's closure is the fraction of the gap's
    excess over the noise floor, in dB, that it removes on the validation
@@ -17,23 +17,31 @@ The rules, in order:
 3. **Parsimony.**  Candidates within statistical reach of the best closure
    are equivalent; among them refitting the nominal parameters
    (``recalibration``) is preferred to new physics, then fewer parameters.
-4. **Explained?**  The chosen candidate must close ``EXPLAINED_CLOSURE`` of
+4. **Explained?**  The chosen candidate must close ``SETTINGS.explained_closure`` of
    the gap.  When the floor is an estimate rather than the data's own
    repetition (a model's residual at the lines the input does not excite,
    the black box's residual), it is also explained by closing as much as
-   the black box does (within ``TIE_CLOSURE`` and the noise's spread),
-   provided the black box closes ``BLACK_BOX_MIN_CLOSURE`` itself: then
+   the black box does (within ``SETTINGS.tie_closure`` and the noise's spread),
+   provided the black box closes ``SETTINGS.black_box_min_closure`` itself: then
    every good model stops at the same level, whatever the floor says.  A
    weaker black box is no yardstick (a second mode withheld, one period per
    signal: recalibration closes 67 %, the three-state black box 53 %).
    Otherwise the answer is ``"unexplained"`` (the ranking still shows what
    each candidate achieved, and the black box how much a model without
    physics closes).
+5. **What else?**  The combinations fitted by forward selection (a pair,
+   then a third effect added to it; see
+   :func:`sklearn_pnlss.gap.stages.added_effects`) count when the pair
+   closes more than the best single candidate, and each further one more
+   than the one before, by the tie and the noise's spread; the verdict
+   then names the pair's first effect as the main one with the added ones
+   (``added_effects``), explained when the last closes
+   ``SETTINGS.explained_closure``.
 
 The noise floor is the training signals' (see
 :mod:`sklearn_pnlss.gap.verdict.noise_floor`; its ``source`` is in the decision and the
 report).  With no floor at all, closure counts against a floor
-``NO_FLOOR_DB`` below the nominal gap and no test is made.
+``SETTINGS.no_floor_db`` below the nominal gap and no test is made.
 """
 from dataclasses import asdict, dataclass, field
 
@@ -41,24 +49,9 @@ import numpy as np
 
 from .noise_floor import gap_test
 from ..fitting.simulate import misfit
+from ..settings import SETTINGS
 
-__all__ = ["RankedEffect", "Decision", "decide", "MIN_EXCESS_DB", "ESTIMATED_FLOOR_MIN_EXCESS_DB", "EXPLAINED_CLOSURE",
-           "TIE_CLOSURE", "BLACK_BOX_MIN_CLOSURE", "NO_FLOOR_DB"]
-
-#: A gap smaller than this above the noise floor is not worth a diagnosis.
-MIN_EXCESS_DB = 0.5
-#: The same when the floor is an estimate (see :attr:`NoiseFloor.replicated`).
-ESTIMATED_FLOOR_MIN_EXCESS_DB = 1.0
-#: Fraction of the gap's excess over the noise (in dB) a candidate must remove.
-EXPLAINED_CLOSURE = 0.9
-#: Closure difference below which two candidates count as equally good,
-#: on top of the statistical spread of the noise.
-TIE_CLOSURE = 0.02
-#: Closure the black box must reach to stand for "as far as a model can
-#: close the gap" when the floor is an estimate.
-BLACK_BOX_MIN_CLOSURE = 0.8
-#: Floor assumed without any noise estimate, below the nominal gap (dB).
-NO_FLOOR_DB = 60.0
+__all__ = ["RankedEffect", "Decision", "decide"]
 
 
 @dataclass
@@ -121,16 +114,22 @@ class Decision:
     noise_detail: str = ""
     sensitive_signals: list = field(default_factory=list)
     recalibrated: dict = field(default_factory=dict)
+    main_effect: str = None
+    added_effects: list = field(default_factory=list)
+    added_names: list = field(default_factory=list)
 
 
 def _db(x):
     return float(10 * np.log10(max(x, 1e-300)))
 
 
-def decide(fits, y_meas, y_nominal, y_effects, y_black_box, noise, significance, offsets=False):
+def decide(fits, y_meas, y_nominal, y_effects, y_black_box, noise, significance, offsets=False, combinations=(),
+           y_combinations=()):
     """Rank candidates and decide; see the module docstring.  With
     ``offsets`` every model is granted each signal's best constant offset
-    (see :func:`~sklearn_pnlss.gap.fitting.simulate.misfit`)."""
+    (see :func:`~sklearn_pnlss.gap.fitting.simulate.misfit`).
+    ``combinations`` (EffectFit, each extending the one before) and their
+    simulations ``y_combinations`` are the forward selection's."""
 
     def _mse(measured, simulated):
         return float(np.mean(misfit(simulated, measured, offsets) ** 2))
@@ -139,8 +138,8 @@ def decide(fits, y_meas, y_nominal, y_effects, y_black_box, noise, significance,
     sizes = np.array([m.size for m in y_meas])
     noise_var = noise.variance if noise is not None else 0.0
     # Without a noise estimate the floor is unknown: closure is then measured
-    # against a floor NO_FLOOR_DB below the nominal gap.
-    floor = np.full(before.shape, noise_var) if noise is not None else before * 10 ** (-NO_FLOOR_DB / 10)
+    # against a floor SETTINGS.no_floor_db below the nominal gap.
+    floor = np.full(before.shape, noise_var) if noise is not None else before * 10 ** (-SETTINGS.no_floor_db / 10)
     excess_db = 10 * np.log10(np.maximum(before / floor, 1 + 1e-12))
 
     def closure(after):
@@ -151,8 +150,7 @@ def decide(fits, y_meas, y_nominal, y_effects, y_black_box, noise, significance,
         left = 10 * np.log10(np.maximum(after, floor) / floor)
         return float(np.clip(1 - left.sum() / excess_db.sum(), -10.0, 1.0))
 
-    ranking = []
-    for fit, ys in zip(fits, y_effects):
+    def ranked(fit, ys):
         if ys is None:  # diverged on a validation signal
             after = np.full(before.shape, np.inf)
         else:
@@ -160,12 +158,14 @@ def decide(fits, y_meas, y_nominal, y_effects, y_black_box, noise, significance,
         after_db = [_db(a) if np.isfinite(a) else float("inf") for a in after]
         gap_after = float(np.mean(after_db))
         gap_before = float(np.mean([_db(b) for b in before]))
-        ranking.append(RankedEffect(
+        return RankedEffect(
             name=fit.effect.name, params=dict(fit.physical), n_params=fit.effect.n_params,
             gap_before_db=gap_before, gap_after_db=gap_after, shrink_db=gap_before - gap_after,
             closure=closure(after) if np.all(np.isfinite(after)) else -np.inf,
             train_gap_db=_db(fit.train_mse), per_signal_after_db=after_db,
-        ))
+        )
+
+    ranking = [ranked(fit, ys) for fit, ys in zip(fits, y_effects)]
     order = sorted(range(len(ranking)), key=lambda i: (-ranking[i].closure, ranking[i].n_params))
     ranking = [ranking[i] for i in order]
     fit_by_name = {f.effect.name: f for f in fits}
@@ -186,7 +186,7 @@ def decide(fits, y_meas, y_nominal, y_effects, y_black_box, noise, significance,
                   black_box_gap_db=bb_gap, black_box_closure=bb_closure,
                   noise_source=None if noise is None else noise.source,
                   noise_detail=(f"no noise estimate (no period repeated, no input repeated, no line free "
-                                f"of input); closure counted against a floor {NO_FLOOR_DB:.0f} dB below "
+                                f"of input); closure counted against a floor {SETTINGS.no_floor_db:.0f} dB below "
                                 f"the nominal gap") if noise is None else noise.detail)
 
     if noise is not None:
@@ -195,7 +195,7 @@ def decide(fits, y_meas, y_nominal, y_effects, y_black_box, noise, significance,
         # A floor read from a model's residual is known to about a dB: a
         # gap within that of it is no gap (a null ramp record: the nominal
         # 0.5 dB above its estimated floor, every candidate closing 0 %).
-        min_excess = MIN_EXCESS_DB if noise.replicated else ESTIMATED_FLOOR_MIN_EXCESS_DB
+        min_excess = SETTINGS.min_excess_db if noise.replicated else SETTINGS.estimated_floor_min_excess_db
         if p > significance or worst < min_excess:
             return Decision(None, False, p, True, reason=(
                 f"no significant gap: the nominal error is {worst:.2f} dB above the noise "
@@ -210,37 +210,61 @@ def decide(fits, y_meas, y_nominal, y_effects, y_black_box, noise, significance,
     if noise is not None:
         nu = np.maximum(noise.dof_per_sample * sizes, 1.0)
         spread = float(np.sum(10 * np.log10(1 + 3 * np.sqrt(2 / nu))) / excess_db.sum())
-    equivalent = [r for r in ranking if r.closure >= best.closure - TIE_CLOSURE - spread]
+    equivalent = [r for r in ranking if r.closure >= best.closure - SETTINGS.tie_closure - spread]
     recal = [r for r in equivalent if fit_by_name[r.name].effect.is_recalibration]
     chosen = recal[0] if recal else min(equivalent, key=lambda r: (r.n_params, -r.closure))
 
+    # Forward selection: the pair beats the best single candidate, each
+    # further combination the one before, by the tie and the noise's
+    # spread; the pair's effect that closes more alone is the main one.
+    chain, added = [chosen], []
+    for fit, ys in zip(combinations, y_combinations):
+        link = ranked(fit, ys)
+        if link.closure <= (chain[-1] if len(chain) > 1 else best).closure + SETTINGS.tie_closure + spread:
+            break
+        parts = link.name.split(" + ")
+        if len(chain) == 1:
+            chain = [max((r for r in ranking if r.name in parts), key=lambda r: r.closure)]
+            added = [p for p in parts if p != chain[0].name]
+        else:
+            added.append(parts[-1])
+        chain.append(link)
+    chosen = chain[0]
+    last = chain[-1]
+    added = ", ".join(added)
     # The black box as yardstick where the floor is only an estimate: a
     # candidate that closes as much as a good model without physics has
     # closed what a model can, wherever the estimate put the floor.
     estimated_floor = noise is None or not noise.replicated
-    as_black_box = bool(estimated_floor and np.isfinite(bb_closure) and bb_closure >= BLACK_BOX_MIN_CLOSURE
-                        and chosen.closure >= bb_closure - TIE_CLOSURE - spread)
-    explained = chosen.closure >= EXPLAINED_CLOSURE or as_black_box
+    as_black_box = bool(estimated_floor and np.isfinite(bb_closure) and bb_closure >= SETTINGS.black_box_min_closure
+                        and last.closure >= bb_closure - SETTINGS.tie_closure - spread)
+    explained = last.closure >= SETTINGS.explained_closure or as_black_box
     if explained:
         name = chosen.name
         reason = (f"{chosen.name} closes {percent(chosen.closure)} of the gap "
                   f"({chosen.gap_before_db:.1f} -> {chosen.gap_after_db:.1f} dB)")
-        if chosen.closure < EXPLAINED_CLOSURE:
+        if len(chain) > 1:
+            reason += (f"; with {added} added, {percent(last.closure)} "
+                       f"({last.gap_after_db:.1f} dB)")
+        if last.closure < SETTINGS.explained_closure:
             reason += f", as much as the black box ({percent(bb_closure)})"
-        if len(equivalent) > 1:
+        if len(equivalent) > 1 and len(chain) == 1:
             others = ", ".join(r.name for r in equivalent if r is not chosen)
             reason += f"; as good within the noise: {others} (more parameters or new physics)"
     else:
         name = "unexplained"
         reason = f"the best candidate, {best.name}, closes only {percent(best.closure)} of the gap"
+        if len(chain) > 1:
+            reason += f"; {chosen.name} with {added} added, {percent(last.closure)}"
         if np.isfinite(bb_closure):
             reason += f"; the black box closes {percent(bb_closure)}"
         elif y_black_box is not None:
             reason += "; the black box diverged"
         if noise is None:
             # Say why a closure may fall short: the floor is a guess.
-            reason += f" (no noise floor: closure counted against a floor {NO_FLOOR_DB:.0f} dB below the gap)"
-    return Decision(name, True, p, explained, reason=reason, **common)
+            reason += f" (no noise floor: closure counted against a floor {SETTINGS.no_floor_db:.0f} dB below the gap)"
+    return Decision(name, True, p, explained, reason=reason, main_effect=chosen.name,
+                    added_effects=chain[1:], added_names=added.split(", ") if added else [], **common)
 
 
 def percent(fraction):

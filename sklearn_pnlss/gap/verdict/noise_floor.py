@@ -36,6 +36,7 @@ from scipy import stats
 
 from ...frequency.noise import periodic_noise_variance
 from ...utils.validation import is_periodic
+from ..settings import SETTINGS
 
 __all__ = ["NoiseFloor", "drift_free_variance", "estimate_noise", "unsettled_signals", "repeated_input_noise",
            "non_excited_noise", "residual_noise", "gap_test"]
@@ -46,9 +47,6 @@ N_NOISE_BANDS = 16
 #: DFT lines a band needs to give a level of its own (a chi-square of 32
 #: degrees of freedom: the level to within about 1 dB).
 MIN_LINES_PER_BAND = 16
-#: A line carries no input when its power is this far below the strongest
-#: line of the record (or segment, see ``NOISE_SEGMENT``) it is read in.
-NON_EXCITED_DB = -60.0
 #: Length (samples) of the Hann-windowed segments a record that is not
 #: periodic is read in when one window over the whole record leaves no band
 #: with enough lines free of input: a jump inside the record (two
@@ -59,15 +57,6 @@ NON_EXCITED_DB = -60.0
 #: lines near the band carry the harmonics a wrong model leaves, which raised
 #: the floor 20 dB above the noise when no candidate held the effect.
 NOISE_SEGMENT = 4096
-#: Two inputs are the same realisation when they differ by less than this
-#: (relative power, dB): a shaker driven twice by one signal measures two
-#: nearly equal forces.
-SAME_INPUT_DB = -60.0
-#: A signal whose periods differ by this much more (power ratio) than the
-#: quietest other signal's periods do has not settled.  Realisations
-#: measured by one sensor differ in that spread by chance alone by about
-#: 1 dB (four periods, thousands of lines); a chaotic response by tens of dB.
-UNSETTLED_RATIO = 10.0
 
 
 @dataclass
@@ -155,7 +144,7 @@ def unsettled_signals(y_list, period):
     smallest of the others' spreads, the sensor's noise where one signal
     settled (a median would not do: a cubic spring of 1e9 N/m^3 at 50 N
     rms is chaotic on three of four multisine realisations).  Above
-    ``UNSETTLED_RATIO`` times that, the signal never settled: a response
+    ``SETTINGS.unsettled_ratio`` times that, the signal never settled: a response
     that is chaotic on that realisation (a stiff backlash driven hard), a
     record started before the transient died, or a structure that changed
     during that record.  No periodic simulation can follow such a signal,
@@ -172,7 +161,7 @@ def unsettled_signals(y_list, period):
     if len(spread) < 2:
         return []
     return [i for i, s in spread.items()
-            if s > UNSETTLED_RATIO * min(t for j, t in spread.items() if j != i)]
+            if s > SETTINGS.unsettled_ratio * min(t for j, t in spread.items() if j != i)]
 
 
 def estimate_noise(y_list, period):
@@ -268,7 +257,7 @@ def repeated_input_noise(u_list, y_list, period, fs):
     """:class:`NoiseFloor` from training signals driven by the same input.
 
     Two signals of one length whose inputs differ by less than
-    ``SAME_INPUT_DB`` are the same experiment run twice: half their
+    ``SETTINGS.same_input_db`` are the same experiment run twice: half their
     output difference is noise (of the difference's two runs), at every
     line.  None without such a pair.
     """
@@ -277,7 +266,7 @@ def repeated_input_noise(u_list, y_list, period, fs):
     for i in range(len(u_list)):
         for j in range(i + 1, len(u_list)):
             ui, uj = u_list[i], u_list[j]
-            if ui.size != uj.size or np.sum((ui - uj) ** 2) > 10 ** (SAME_INPUT_DB / 10) * np.sum(ui**2):
+            if ui.size != uj.size or np.sum((ui - uj) ** 2) > 10 ** (SETTINGS.same_input_db / 10) * np.sum(ui**2):
                 continue
             n_pairs += 1
             # Steady-state periodic pairs: the period averages, each of
@@ -323,7 +312,7 @@ def non_excited_noise(u_list, y_list, simulations, period, fs):
 
     Notes
     -----
-    A line is not excited when the input's power there is ``NON_EXCITED_DB``
+    A line is not excited when the input's power there is ``SETTINGS.non_excited_db``
     below its strongest line (DC never counts); a record that is not
     steady-state periodic (filtered noise, a ramp, realisations with gaps)
     is read through a Hann window (see :func:`_power`), in segments of
@@ -362,7 +351,7 @@ def _read_non_excited(u_list, y_list, simulations, period, fs, segment):
         masks = []
         for sl in slices:
             p = _power(u[sl], w)
-            usable = p < p[1:].max() * 10 ** (NON_EXCITED_DB / 10)
+            usable = p < p[1:].max() * 10 ** (SETTINGS.non_excited_db / 10)
             usable[0] = False
             masks.append(usable)
         reads.append((slices, w, masks))

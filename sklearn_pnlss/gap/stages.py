@@ -1,0 +1,492 @@
+"""The stages of a gap diagnosis' fit, in the order :data:`STAGES` runs them.
+
+Each stage reads and updates one :class:`Fitting` (the training data as
+fitted, the candidates, their fits so far) and says in its docstring what it
+does and why; the thresholds it compares with are in
+:mod:`sklearn_pnlss.gap.settings`.
+
+1. :func:`measurement_chain`: the nominal's own errors first (its refit,
+   and a delay between the channels with it); a delay found there is the
+   measurement chain's and is fitted with every candidate.
+2. :func:`all_candidates`: every other candidate at the fitting rate, and
+   the black box.
+3. :func:`refine_contenders`: the candidates still in contention refined at
+   the reporting rate.
+4. :func:`hidden_delay`: a channel delay looked for again behind the best
+   candidate.
+5. :func:`polish_leader`: the best candidate's fit carried on while it
+   still improves.
+6. :func:`added_effects`: a second and third effect added to the best one
+   while it leaves a gap.
+"""
+import itertools
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from joblib import Parallel, delayed
+from scipy.stats import chi2
+
+from .candidates.clues import read_clues
+from .candidates.effects import InputDelay, delay_signal
+from .fitting.black_box import fit_black_box
+from .fitting.calibrate import at_rate, fit_effect, refine_fit
+from .settings import SETTINGS
+
+__all__ = ["Fitting", "STAGES", "measurement_chain", "all_candidates", "refine_contenders", "hidden_delay",
+           "polish_leader", "added_effects"]
+
+BLACK_BOX = "__black_box__"
+
+
+def _expected_cost(name, task):
+    """Rough relative cost of a task, to start the long ones first: the
+    starts times the parameters (each iteration simulates once per
+    parameter); the black box counts as a mid-sized candidate."""
+    if name == BLACK_BOX:
+        return 8
+    first = task[1][0]  # a fit task's effect, or a refinement's fit
+    effect = getattr(first, "effect", first)
+    return len(effect.starts) * max(effect.n_params, 1)
+
+
+@dataclass
+class Fitting:
+    """What the stages of one diagnosis' fit share.
+
+    Attributes
+    ----------
+    diagnosis : GapDiagnosis
+        The estimator being fitted: its parameters, ``scales_``, ``noise_``
+        and ``train_gap_db_``.
+    u_list, y_list, y_centred : list of ndarray
+        Training inputs, measured outputs, and the outputs less their
+        offsets (the black box and the clues read those).
+    train, coarse : SignalSet
+        The training inputs at the reporting rate and at the fitting rate.
+    clues : DataClues
+        The training data's readings that start the candidates.
+    raw : list of Effect
+        The candidates as listed (the effect alone).
+    recalibration : Recalibration or None
+        The nominal's refit every candidate is fitted with (None: the
+        nominal is exact).
+    effects : list of Effect
+        The candidates as they are fitted now: each with the nominal's
+        refit, and a found delay.
+    settings : dict
+        ``fit_effect``'s keywords shared by every fit (``ftol``,
+        ``offsets``, ``noise_variance``).
+    done : dict
+        Name -> EffectFit (the black box: its model) of each fit so far.
+    delay : dict or None
+        The channel delay found, once found.
+    measured : list of Effect
+        The measurement chain's candidates (the nominal's refit, the delay).
+    """
+
+    diagnosis: object
+    u_list: list
+    y_list: list
+    y_centred: list
+    y_nominal: list
+    train: object
+    coarse: object
+    clues: object
+    raw: list
+    recalibration: object
+    settings: dict
+    effects: list = None
+    done: dict = field(default_factory=dict)
+    delay: dict = None
+    measured: list = field(default_factory=list)
+    combinations: list = field(default_factory=list)
+    _finished: object = field(default_factory=lambda: itertools.count(1))
+    _fitted: set = field(default_factory=set)
+    _planned: set = field(default_factory=set)
+    _n_tasks: int = 0
+
+    def __post_init__(self):
+        self.effects = [self.composed(e) for e in self.raw]
+        self._planned = {e.name for e in self.effects} | ({BLACK_BOX} if self.diagnosis.black_box else set())
+        self._n_tasks = len(self._planned)
+
+    def composed(self, effect):
+        """``effect`` (as listed, or several together) as every candidate
+        is fitted: with the nominal's refit, and the channel delay once
+        found."""
+        if self.recalibration is None:
+            return effect
+        if effect.is_recalibration:
+            return self.recalibration
+        effect = effect.with_recalibration(self.recalibration)
+        return effect if self.delay is None else effect.with_delay(InputDelay(), self.delay["theta"])
+
+    # -- tasks -----------------------------------------------------------------
+    def fit_task(self, effect, clues=None, max_nfev=None, full_rate=False, refine=True):
+        """A fit of ``effect``: at the fitting rate and refined at the
+        reporting rate; ``full_rate``: at the reporting rate only (carrying
+        on a fit refined there already); ``refine=False``: at the fitting
+        rate only (see :func:`refine_contenders`)."""
+        d = self.diagnosis
+        return delayed(fit_effect)(effect, d.nominal, d.scales_, self.train if full_rate else self.coarse,
+                                   self.y_list, max_nfev=d.max_nfev if max_nfev is None else max_nfev,
+                                   fine_signals=self.train if refine and not full_rate else None,
+                                   clues=self.clues if clues is None else clues, **self.settings)
+
+    def refine_task(self, fit):
+        """``fit`` (made at the fitting rate) carried on to the reporting rate."""
+        d = self.diagnosis
+        return delayed(refine_fit)(fit, d.nominal, d.scales_, self.coarse, self.y_list, fine_signals=self.train,
+                                   clues=self.clues, max_nfev=d.max_nfev, **self.settings)
+
+    def black_box_task(self):
+        d = self.diagnosis
+        return delayed(fit_black_box)(self.u_list, self.y_centred, d.period, d.random_state, 1)
+
+    def run(self, tasks):
+        """Run ``tasks`` (name -> task) in one pool, the costliest started
+        first so that the last to finish is a short one; their results by
+        name."""
+        # a refit, or a task not planned at the start (a combination), adds to the count
+        self._n_tasks += sum(name in self._fitted or name not in self._planned for name in tasks)
+        self._fitted.update(tasks)
+        self._planned.update(tasks)
+        order = sorted(tasks, key=lambda name: -_expected_cost(name, tasks[name]))
+        return dict(zip(order, Parallel(n_jobs=self.diagnosis.n_jobs, prefer="threads")(
+            delayed(self._announced)(k, tasks[k]) for k in order)))
+
+    def _announced(self, name, task):
+        # Each candidate says when it is done (from its worker thread): the
+        # progress of a fit that takes minutes.
+        func, args, kwargs = task
+        out = func(*args, **kwargs)
+        if self.diagnosis.verbose:
+            what = "the black box" if name == BLACK_BOX else (
+                f"{name}: training {10 * np.log10(out.train_mse):.2f} dB, {out.n_evaluations} "
+                f"simulations, {out.seconds:.1f} s")
+            self.log(f"{next(self._finished)}/{self._n_tasks} done, {what}")
+        return out
+
+    def log(self, text):
+        self.diagnosis._log(text)
+
+    # -- readings ---------------------------------------------------------------
+    def aligned_clues(self, delay_s):
+        """The clues as the delayed model sees the data: the input (and the
+        nominal's response, time-invariant) delayed by the channel delay;
+        read off the raw channels, a delay of a millisecond is a phase error
+        larger than a second mode's whole change."""
+        d, train = self.diagnosis, self.train
+        periodic = [bool(P) for P in train.n_periods]
+        shift = delay_s * d.fs
+        return read_clues(d.nominal, [delay_signal(u, shift, p) for u, p in zip(self.u_list, periodic)],
+                          self.y_centred, [delay_signal(y, shift, p) for y, p in zip(self.y_nominal, periodic)],
+                          train.n_periods, d.period_, d.fs)
+
+    def nested_fits(self):
+        """The fits that every candidate contains: the nominal's refit
+        (``recalibration``, when the nominal is freed), and the refit with
+        the channel delay once one is found (every candidate is then fitted
+        with it)."""
+        if not self.diagnosis._free_nominal():
+            return []
+        return [self.done[e.name] for e in self.effects if e.name in self.done
+                and (e.is_recalibration or (self.delay is not None and e.name == "input_delay"))]
+
+    def adds_to(self, fit, nested):
+        """Whether ``fit`` explains more of the training data than
+        ``nested``, the fit it contains, by what the verdict could tell on
+        validation: its cost lower by more than the chi-square quantile of
+        its extra parameters at the diagnosis' ``significance``, in units of
+        the noise (an F-test with the noise known), and its error lower by
+        more than ``tie_closure`` of the nominal's excess over the noise, in
+        dB (the verdict's own tie; far above the noise the first test
+        passes for any extra parameter).  A candidate that does not cannot
+        beat the nominal's refit, which the verdict prefers whenever it
+        explains as much.  Without a nested fit or a noise floor, every
+        candidate adds."""
+        d = self.diagnosis
+        if nested is None or d.noise_ is None or fit is nested:
+            return True
+        n_samples = sum(y.size for y in self.y_list)
+        extra = max(fit.effect.n_params - nested.effect.n_params, 1)
+        gain = (nested.coarse_mse - fit.coarse_mse) * n_samples * d.noise_.dof_per_sample / d.noise_.variance
+        excess_db = d.train_gap_db_ - 10 * np.log10(d.noise_.variance)
+        gain_db = 10 * np.log10(nested.coarse_mse / fit.coarse_mse)
+        return bool(gain > chi2.ppf(1 - d.significance, extra) and gain_db > SETTINGS.tie_closure * excess_db)
+
+
+# -- the stages -------------------------------------------------------------------
+def measurement_chain(run):
+    """Fit the nominal's own errors first: ``recalibration``, and a delay
+    between the force and displacement channels with it (when both are
+    candidates and the nominal is freed: they are then nested, the delay at
+    zero is the recalibration).
+
+    A delay that improves the refit by ``delay_found_db`` is a property of
+    the measurement chain (a sensor, an anti-alias filter): every other
+    candidate is fitted with it free too, and the clues are read at it.
+    Every other candidate contains the nominal's refit, so the fitting rate
+    is corrected by that refit's own discretisation error (corrected by the
+    nominal's, a stiffness 5 % off left every candidate 7 dB above the
+    noise); the two fits are scored at that rate too.
+    """
+    d = run.diagnosis
+    by_name = {e.name: e for e in run.effects}
+    if not d._free_nominal() or "recalibration" not in by_name or "input_delay" not in by_name:
+        return
+    run.measured = [by_name["recalibration"], by_name["input_delay"]]
+    run.done = run.run({e.name: run.fit_task(e) for e in run.measured})
+    recal, delay = run.done["recalibration"], run.done["input_delay"]
+    gain_db = 10 * np.log10(recal.train_mse / delay.train_mse)
+    if gain_db >= SETTINGS.delay_found_db:
+        run.delay = dict(theta=float(delay.theta[0]), delay_s=float(delay.physical["delay_s"]),
+                         gain_db=float(gain_db))
+        run.log(f"the data carry a delay of {1e3 * run.delay['delay_s']:.3g} ms "
+                f"({run.delay['gain_db']:.1f} dB better fit); it is fitted with every candidate")
+        run.clues = run.aligned_clues(run.delay["delay_s"])
+        run.effects = [e if e.name in run.done else e.with_delay(InputDelay(), run.delay["theta"]) for e in run.effects]
+        _recalibration_with_delay(run)
+    refit = min(run.nested_fits(), key=lambda f: f.train_mse)
+    run.coarse = run.train.coarse(d.fit_oversampling, *refit.effect.simulator(refit.theta, d.nominal, d.scales_)[:2])
+    run.done = {name: at_rate(fit, d.nominal, d.scales_, run.coarse, run.y_list, d.offsets)
+                for name, fit in run.done.items()}
+
+
+def _recalibration_with_delay(run):
+    """The candidates once the first look has found a channel delay.
+
+    The delay is the measurement chain's, so the nominal's own error is
+    the refit *with* it: when that refit moved a nominal parameter by
+    ``recalibration_shown`` or more, it becomes ``recalibration`` (the
+    verdict names the parameters and the channel delay) and
+    ``input_delay`` leaves the candidates: a stiffness 5 % off seen
+    through a sensor's delay is a recalibration, not a delay with a side
+    note.  The refit without the delay, left far above the noise, is no
+    candidate any more.  When nothing moved, the delay alone explains the
+    nominal's error and is reported as ``input_delay``.
+    """
+    refit = run.done["input_delay"]
+    if all(abs(v) < SETTINGS.recalibration_shown for v in run.diagnosis._nominal_moves(refit).values()):
+        return
+    recal = next(e for e in run.effects if e.is_recalibration)
+    relabelled = refit.effect.variant(name=recal.name, is_recalibration=True,
+                                      description=recal.description + ", with the channels' delay")
+    run.done[recal.name] = replace(refit, effect=relabelled)
+    del run.done["input_delay"]
+    run.effects = [relabelled if e.is_recalibration else e for e in run.effects if e.name != "input_delay"]
+
+
+def all_candidates(run):
+    """Fit every candidate not fitted yet at the fitting rate (and the
+    black box, which needs no rate), all in one pool."""
+    tasks = {e.name: run.fit_task(e, refine=False) for e in run.effects if e.name not in run.done}
+    if run.diagnosis.black_box:
+        tasks[BLACK_BOX] = run.black_box_task()
+    run.done.update(run.run(tasks))
+
+
+def refine_contenders(run):
+    """Refine at the reporting rate the candidates still in contention:
+    those whose training error at the fitting rate is within
+    ``contention_db`` of the best one's and that add to the nominal's refit
+    they contain (:meth:`Fitting.adds_to`).
+
+    The verdict compares the best candidates, and their parameters must
+    hold at the rate every validation simulation runs at; a candidate ten
+    times worse on training cannot become the best on validation, and
+    refining it (the model's own discretisation error carried over, a
+    check at the reporting rate, sometimes a whole fit there) was half of
+    its time: on the clean cubic case, a fit of the wrong hysteresis at the
+    reporting rate cost 99 of a diagnosis' 150 s.
+    """
+    done = run.done
+    fitted = [e for e in run.effects if e.name in done and done[e.name].effect.n_params]
+    if not fitted:
+        return
+    best = min(done[e.name].coarse_mse for e in fitted)
+    nested = min(run.nested_fits(), key=lambda f: f.coarse_mse, default=None)
+    contenders = [e.name for e in fitted if done[e.name].coarse_mse <= best * 10 ** (SETTINGS.contention_db / 10)
+                  and not done[e.name].refined and run.adds_to(done[e.name], nested)]
+    done.update(run.run({name: run.refine_task(done[name]) for name in contenders}))
+
+
+def hidden_delay(run):
+    """Look for a channel delay behind a dominant nonlinearity, when the
+    first look found none.
+
+    With a strong nonlinear effect the nominal refit leaves an error the
+    delay barely changes (a backlash at -59 dB hides a delay worth
+    -70 dB), so the first look misses it.  The delay is looked for again
+    on the best refined candidate: if freeing it gains ``hidden_delay_db``
+    there, it belongs to the measurement chain and every candidate is
+    refitted with it, from its own fit and from its clues aligned at that
+    delay (with half the iterations: most of them start close).  Skipped
+    when the best candidate already sits within ``hidden_delay_db`` of the
+    noise floor: no delay could gain that.
+    """
+    d, done = run.diagnosis, run.done
+    if not run.measured or run.delay is not None:
+        return
+    measured = {e.name for e in run.measured}
+    rest = [e for e in run.effects if e.name not in measured]
+    contenders = [e for e in rest if done[e.name].refined]
+    if not contenders:
+        return  # no candidate adds to the nominal's refit: no nonlinearity to hide a delay
+    best = min(contenders, key=lambda e: done[e.name].train_mse)
+    if d.noise_ is not None and done[best.name].train_mse < d.noise_.variance * 10 ** (SETTINGS.hidden_delay_db / 10):
+        return
+    delay_start = done["input_delay"].theta[:1]  # its theta: the delay's (samples), then the refitted nominal's
+
+    def delayed_effect(e, starts=()):
+        # from its fit without the delay (whose listed starts were tried
+        # then: the warm start holds the best of them)
+        warm = np.append(done[e.name].theta, delay_start)
+        return e.with_delay(InputDelay(), delay_start).variant(starts=[warm] + list(starts), data_starts=[])
+
+    clues_at = {}  # the clues aligned at each delay (samples), read once for every candidate
+
+    def aligned_starts(e, shifts):
+        # e's data starts from the clues aligned at each delay
+        starts = []
+        for shift in shifts:
+            if shift not in clues_at:
+                clues_at[shift] = run.aligned_clues(shift / d.fs)
+            starts += e.with_delay(InputDelay(), [shift]).data_starts(clues_at[shift], d.nominal, d.scales_)
+        return starts
+
+    # The first look's delay is biased by the nonlinearity it could not
+    # fit: the best candidate's clues are read at several delays (a start
+    # costs one simulation).
+    shifts = sorted({round(float(delay_start[0]), 3), *SETTINGS.hidden_delay_shifts})
+    trial = run.run({best.name: run.fit_task(delayed_effect(best, aligned_starts(best, shifts)))})[best.name]
+    gain_db = 10 * np.log10(done[best.name].train_mse / trial.train_mse)
+    if gain_db < SETTINGS.hidden_delay_db:
+        return
+    run.delay = dict(theta=float(trial.theta[-1]), delay_s=float(trial.physical["delay_s"]), gain_db=float(gain_db))
+    run.log(f"the data carry a delay of {1e3 * run.delay['delay_s']:.3g} ms, hidden behind {best.name} "
+            f"({gain_db:.1f} dB better fit with it); every candidate is refitted with it")
+    found = [run.delay["theta"]]
+    refits = {e.name: run.fit_task(delayed_effect(e, aligned_starts(e, found)), max_nfev=max(3, d.max_nfev // 2))
+              for e in rest if e is not best}
+    done[best.name] = trial
+    done.update(run.run(refits))
+    # the effects as refitted, the delay free in each
+    run.effects = [e if e.name in measured else done[e.name].effect for e in run.effects]
+
+
+def polish_leader(run):
+    """Carry on the fit of the refined candidate with the lowest training
+    error while it stops on its iteration budget and still improves.
+
+    The verdict rests on that candidate, and a needle-narrow minimum (a
+    stiff backlash with a channel delay and the nominal refitted: six
+    parameters, 0.1 % wide) can take more iterations than the budget every
+    other candidate gets.  At most ``leader_budgets`` more budgets, each at
+    the reporting rate from where the last stopped, and only while a budget
+    gains ``leader_progress_db`` and the training error is that far above
+    the noise floor (where the data give one before the fits): a fit at the
+    noise has nothing left to gain.
+    """
+    done = run.done
+    leader = min((e for e in run.effects if done[e.name].effect.n_params and done[e.name].refined),
+                 key=lambda e: done[e.name].train_mse, default=None)
+    if leader is not None:
+        done[leader.name] = _carried_on(run, done[leader.name])
+
+
+def _carried_on(run, fit):
+    """``fit`` carried on at the reporting rate, a budget at a time, while
+    it stops on its budget, gains ``leader_progress_db`` and stays that far
+    above the noise floor (``leader_budgets`` at most; see
+    :func:`polish_leader`)."""
+    d = run.diagnosis
+    floor = 0.0 if d.noise_ is None else d.noise_.variance * 10 ** (SETTINGS.leader_progress_db / 10)
+    name = fit.effect.name
+    for _ in range(SETTINGS.leader_budgets):
+        if fit.converged or fit.train_mse < floor:
+            break
+        warm = fit.effect.variant(starts=[fit.theta], data_starts=[])
+        more = run.run({name: run.fit_task(warm, full_rate=True)})[name]
+        gain_db = 10 * np.log10(fit.train_mse / more.train_mse)
+        if gain_db <= 0:
+            break
+        fit = replace(more, n_evaluations=fit.n_evaluations + more.n_evaluations, seconds=fit.seconds + more.seconds)
+        run.log(f"{name} carried on: training {10 * np.log10(more.train_mse):.2f} dB ({gain_db:.1f} dB better)")
+        if gain_db < SETTINGS.leader_progress_db:
+            break
+    return fit
+
+
+def added_effects(run):
+    """Forward selection: a second (and a third) effect added while the best
+    one leaves a gap.
+
+    Real structures seldom miss exactly one effect.  When the refined
+    candidate with the lowest training error closes less than
+    ``explained_closure`` of the nominal's training excess over the noise,
+    pairs are fitted: each of the ``forward_bases`` best refined candidates
+    with every other physical effect (at the fitting rate, half the
+    iteration budget, from both fits).  The best candidate alone can be the
+    wrong one, a flexible effect standing in for two others (a hysteresis
+    closing 56 % of a cubic spring with quadratic damping, where the cubic
+    spring alone closes 26 %), so the pairs do not all start from it.  The
+    best pair that adds to the best single fit (:meth:`Fitting.adds_to`) is
+    refined (and carried on as :func:`polish_leader` does), and a third effect is looked for the same way from it, at most
+    ``max_added_effects`` in all.  The combinations are kept in
+    ``run.combinations``; whether each pays is decided on validation (see
+    :func:`~sklearn_pnlss.gap.verdict.decision.decide`).  Needs a noise
+    floor from the data to judge the gap left.
+    """
+    d, done = run.diagnosis, run.done
+    if d.noise_ is None:
+        return
+    physical = {e.name: e for e in run.raw if not e.is_recalibration and e.name != "input_delay" and e.name in done}
+    refined = sorted((done[name] for name in physical if done[name].refined), key=lambda f: f.train_mse)
+    if not refined:
+        return
+    leader, bases = refined[0], [(physical[f.effect.name], f) for f in refined[:SETTINGS.forward_bases]]
+    nominal_excess_db = d.train_gap_db_ - 10 * np.log10(d.noise_.variance)
+    for _ in range(SETTINGS.max_added_effects):
+        left_db = 10 * np.log10(max(leader.train_mse / d.noise_.variance, 1.0))
+        if nominal_excess_db <= 0 or 1 - left_db / nominal_excess_db >= SETTINGS.explained_closure:
+            return
+        tasks, raws = {}, {}
+        for raw_base, base in bases:
+            parts = getattr(raw_base, "parts", [raw_base.name])
+            for other in physical.values():
+                together = sorted([*parts, other.name])
+                if other.name in parts or any(sorted(getattr(r, "parts", [])) == together for r in raws.values()):
+                    continue  # in the base already, or this set of effects is planned from another base
+                raw = raw_base.plus(other)
+                tasks[raw.name] = run.fit_task(run.composed(raw).variant(starts=_pair_starts(raw_base, base, other,
+                                                                                            done[other.name]),
+                                                                        data_starts=[]),
+                                               max_nfev=max(3, d.max_nfev // 2), refine=False)
+                raws[raw.name] = raw
+        if not tasks:
+            return
+        fitted = run.run(tasks)
+        best = min(fitted, key=lambda name: fitted[name].coarse_mse)
+        if not run.adds_to(fitted[best], leader):  # both at the fitting rate (coarse_mse)
+            return
+        # refined, and carried on like the leading candidate: the verdict may rest on it
+        refined_best = _carried_on(run, run.run({best: run.refine_task(fitted[best])})[best])
+        run.log(f"{best}: training {10 * np.log10(refined_best.train_mse):.2f} dB "
+                f"(the best alone {10 * np.log10(leader.train_mse):.2f} dB)")
+        run.combinations.append(refined_best)
+        leader, bases = refined_best, [(raws[best], refined_best)]
+
+
+def _pair_starts(raw_base, base, other, other_fit):
+    """Starts of ``raw_base`` plus ``other`` (their ``theta`` in turn, then
+    the nominal's refit and delay): the base's fit with the other's own fit
+    (its effect's part) or its first listed start, the nominal's refit and
+    delay as the base has them."""
+    n_base, n_other = raw_base.bounds[0].size, other.bounds[0].size
+    rest = base.theta[n_base:]
+    return [np.concatenate([base.theta[:n_base], s, rest]) for s in (other_fit.theta[:n_other], other.starts[0])]
+
+
+#: The stages of :meth:`GapDiagnosis.fit`, in order.
+STAGES = (measurement_chain, all_candidates, refine_contenders, hidden_delay, polish_leader, added_effects)
