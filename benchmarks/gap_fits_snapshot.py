@@ -2,8 +2,8 @@
 from one that changes the numbers.
 
 One case per family of ``gap_withheld.py`` (and two in family d), each a
-whole diagnosis (``n_jobs=2``): the fitted candidates' ``theta``, training
-errors and simulation counts, the ranking on validation and the verdict.
+whole diagnosis (``n_jobs=2``): the fitted candidates' (and the forward
+selection's combinations') ``theta``, training errors and simulation counts, the ranking on validation and the verdict.
 ``--write`` stores them in ``results/gap_fits_snapshot.json``; without it
 the present code's fits are compared with that file and every difference
 is printed (exact equality: a pure refactor keeps every bit; a change of
@@ -39,7 +39,7 @@ def snapshot(family, name, strength, seed):
     return dict(best=report.best_effect, delay_s=None if diagnosis.delay_ is None else diagnosis.delay_["delay_s"],
                 fits={f.effect.name: dict(theta=[float(t) for t in f.theta], train_mse=f.train_mse,
                                           n_evaluations=f.n_evaluations, refined=f.refined)
-                      for f in diagnosis.fits_},
+                      for f in diagnosis.fits_ + diagnosis.combinations_},
                 ranking=[[r.name, r.gap_after_db] for r in report.ranking], seconds=time.perf_counter() - t0)
 
 
