@@ -3,8 +3,10 @@ measurements, which unmodelled effect causes it, how far adding it shrinks
 the gap (see :class:`GapDiagnosis`)."""
 from .verdict.decision import RankedEffect
 from .diagnosis import GapDiagnosis
+from .candidates.effect import EffectTerms
 from .candidates.effects import Effect, Scales, default_effects
 from .linear_nominal import linear_nominal
 from .report import GapReport
 
-__all__ = ["GapDiagnosis", "GapReport", "RankedEffect", "Effect", "Scales", "default_effects", "linear_nominal"]
+__all__ = ["GapDiagnosis", "GapReport", "RankedEffect", "Effect", "EffectTerms", "Scales", "default_effects",
+           "linear_nominal"]

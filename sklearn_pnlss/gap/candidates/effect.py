@@ -136,8 +136,7 @@ class Effect:
     displacement); pass ``SoftStop()`` in ``GapDiagnosis(effects=...)``,
     which frees the nominal's parameters and a channel delay with it:
 
-    >>> from sklearn_pnlss.gap import Effect, Scales
-    >>> from sklearn_pnlss.gap.candidates.effect import EffectTerms
+    >>> from sklearn_pnlss.gap import Effect, EffectTerms, Scales
     >>> from sklearn_pnlss.physics import DeadZoneSpring, Oscillator
     >>> class SoftStop(Effect):
     ...     name = "soft_stop"
