@@ -189,11 +189,12 @@ def _decide_with(before, candidates, combinations):
                   y_combinations=[[_with_mse(a) for a in m] for _, m in combinations])
 
 
-def test_an_added_effect_names_the_pair_s_first_as_the_main_one():
+def test_an_added_effect_names_the_pair_s_stronger_part_as_the_main_one():
     """40 dB above the noise: a flexible effect closes 55 % alone, the
     cubic spring 25 %; the cubic spring with friction closes all of it, and
-    a third effect adds nothing beyond the tie.  The pair's first effect is
-    the main one, friction is added, the third is not."""
+    a third effect adds nothing beyond the tie.  The pair's effect that
+    closes more alone (the cubic spring) is the main one, friction is
+    added, the third is not."""
     d = _decide_with([1e-8], [(_fit("flexible", 3), [10**1.8 * S2]), (_fit("cubic"), [10**3 * S2])],
                      [(_fit("cubic + friction", 2), [S2]), (_fit("cubic + friction + other", 3), [0.99 * S2])])
     assert d.best_effect == "cubic" and d.main_effect == "cubic" and d.explained

@@ -451,13 +451,13 @@ def added_effects(run):
         left_db = 10 * np.log10(max(leader.train_mse / d.noise_.variance, 1.0))
         if nominal_excess_db <= 0 or 1 - left_db / nominal_excess_db >= SETTINGS.explained_closure:
             return
-        tasks, raws = {}, {}
+        tasks, raws, planned = {}, {}, set()
         for raw_base, base in bases:
-            parts = getattr(raw_base, "parts", [raw_base.name])
             for other in physical.values():
-                together = sorted([*parts, other.name])
-                if other.name in parts or any(sorted(getattr(r, "parts", [])) == together for r in raws.values()):
+                together = frozenset([*raw_base.parts, other.name])
+                if other.name in raw_base.parts or together in planned:
                     continue  # in the base already, or this set of effects is planned from another base
+                planned.add(together)
                 raw = raw_base.plus(other)
                 tasks[raw.name] = run.fit_task(run.composed(raw).variant(starts=_pair_starts(raw_base, base, other,
                                                                                             done[other.name]),

@@ -194,6 +194,11 @@ class Effect:
     def n_params(self):
         return len(self.param_names)
 
+    @property
+    def parts(self):
+        """The names of the single effects it is made of (see :meth:`plus`)."""
+        return [self.name]
+
     def data_starts(self, clues, nominal, scales):
         """Starting points read from the data (empty without clues or a
         data start), inside the bounds."""
@@ -284,8 +289,7 @@ class _Together(_Combined):
 
     @property
     def parts(self):
-        """The names of the single effects combined, in order."""
-        return [*getattr(self.effect, "parts", [self.effect.name]), self.extra.name]
+        return [*self.effect.parts, self.extra.name]
 
 
 class _WithRecalibration(_Combined):

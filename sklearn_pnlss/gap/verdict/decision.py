@@ -34,8 +34,8 @@ The rules, in order:
    :func:`sklearn_pnlss.gap.stages.added_effects`) count when the pair
    closes more than the best single candidate, and each further one more
    than the one before, by the tie and the noise's spread; the verdict
-   then names the pair's first effect as the main one with the added ones
-   (``added_effects``), explained when the last closes
+   then names the pair's effect that closes more alone as the main one,
+   with the added ones (``added_effects``), explained when the last closes
    ``SETTINGS.explained_closure``.
 
 The noise floor is the training signals' (see
@@ -231,7 +231,6 @@ def decide(fits, y_meas, y_nominal, y_effects, y_black_box, noise, significance,
         chain.append(link)
     chosen = chain[0]
     last = chain[-1]
-    added = ", ".join(added)
     # The black box as yardstick where the floor is only an estimate: a
     # candidate that closes as much as a good model without physics has
     # closed what a model can, wherever the estimate put the floor.
@@ -244,7 +243,7 @@ def decide(fits, y_meas, y_nominal, y_effects, y_black_box, noise, significance,
         reason = (f"{chosen.name} closes {percent(chosen.closure)} of the gap "
                   f"({chosen.gap_before_db:.1f} -> {chosen.gap_after_db:.1f} dB)")
         if len(chain) > 1:
-            reason += (f"; with {added} added, {percent(last.closure)} "
+            reason += (f"; with {', '.join(added)} added, {percent(last.closure)} "
                        f"({last.gap_after_db:.1f} dB)")
         if last.closure < SETTINGS.explained_closure:
             reason += f", as much as the black box ({percent(bb_closure)})"
@@ -255,7 +254,7 @@ def decide(fits, y_meas, y_nominal, y_effects, y_black_box, noise, significance,
         name = "unexplained"
         reason = f"the best candidate, {best.name}, closes only {percent(best.closure)} of the gap"
         if len(chain) > 1:
-            reason += f"; {chosen.name} with {added} added, {percent(last.closure)}"
+            reason += f"; {chosen.name} with {', '.join(added)} added, {percent(last.closure)}"
         if np.isfinite(bb_closure):
             reason += f"; the black box closes {percent(bb_closure)}"
         elif y_black_box is not None:
@@ -264,7 +263,7 @@ def decide(fits, y_meas, y_nominal, y_effects, y_black_box, noise, significance,
             # Say why a closure may fall short: the floor is a guess.
             reason += f" (no noise floor: closure counted against a floor {SETTINGS.no_floor_db:.0f} dB below the gap)"
     return Decision(name, True, p, explained, reason=reason, main_effect=chosen.name,
-                    added_effects=chain[1:], added_names=added.split(", ") if added else [], **common)
+                    added_effects=chain[1:], added_names=added, **common)
 
 
 def percent(fraction):
