@@ -87,7 +87,7 @@ class BlackBoxClock:
     """Seconds of the black box's fit (wrapped where the diagnosis calls it)."""
 
     def __enter__(self):
-        import sklearn_pnlss.gap.diagnosis as diagnosis
+        import sklearn_pnlss.gap.stages as diagnosis
 
         self.module, self.original, self.seconds = diagnosis, diagnosis.fit_black_box, []
 

@@ -62,7 +62,8 @@ def differences(old, new):
                 rel = float(np.max(np.abs(a - b) / np.maximum(np.abs(a), 1e-300))) if a.shape == b.shape else np.inf
                 worst = max(worst, rel)
                 lines.append(f"{key}: {name} relative difference {rel:.1e}, simulations "
-                             f"{fit['n_evaluations']} -> {other['n_evaluations']}")
+                             f"{fit['n_evaluations']} -> {other['n_evaluations']}, training "
+                             f"{10 * np.log10(fit['train_mse']):.2f} -> {10 * np.log10(other['train_mse']):.2f} dB")
     return lines, worst
 
 

@@ -12,6 +12,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from ..physics.oscillator import Oscillator
 from ..utils.parameters import Interval, validates_parameters
+from ..utils.threads import one_blas_thread
 from ..utils.validation import as_signal_list, check_period
 from .fitting.black_box import branch_opinions
 from .fitting.calibrate import meaningful_ftol, parameter_covariance
@@ -429,8 +430,9 @@ class GapDiagnosis(BaseEstimator):
     def _simulate_fits(self, signals, fits=None):
         """Every fitted candidate's (or ``fits``') simulation of
         ``signals``, in parallel threads (None for one that diverges)."""
-        return Parallel(n_jobs=self.n_jobs, prefer="threads")(
-            delayed(self._simulate_fit)(f, signals) for f in (self.fits_ if fits is None else fits))
+        with one_blas_thread():
+            return Parallel(n_jobs=self.n_jobs, prefer="threads")(
+                delayed(self._simulate_fit)(f, signals) for f in (self.fits_ if fits is None else fits))
 
     def _black_box_predict(self, u):
         """The black box's simulation of one signal; None where it leaves its
@@ -470,8 +472,9 @@ class GapDiagnosis(BaseEstimator):
         lower, upper = fit.effect.bounds
         draws = [np.clip(rng.multivariate_normal(fit.theta, cov, check_valid="ignore"), lower, upper)
                  for _ in range(SETTINGS.sensitivity_draws)]
-        moved = Parallel(n_jobs=self.n_jobs, prefer="threads")(
-            delayed(self._simulate_fit)(fit, val, theta) for theta in draws)
+        with one_blas_thread():
+            moved = Parallel(n_jobs=self.n_jobs, prefer="threads")(
+                delayed(self._simulate_fit)(fit, val, theta) for theta in draws)
         moved = [m for m in moved if m is not None]
         if not moved:
             return []

@@ -31,6 +31,7 @@ from .candidates.effects import InputDelay, delay_signal
 from .fitting.black_box import fit_black_box
 from .fitting.calibrate import at_rate, fit_effect, refine_fit
 from .settings import SETTINGS
+from ..utils.threads import one_blas_thread
 
 __all__ = ["Fitting", "STAGES", "measurement_chain", "all_candidates", "refine_contenders", "hidden_delay",
            "polish_leader", "added_effects"]
@@ -152,8 +153,9 @@ class Fitting:
         self._fitted.update(tasks)
         self._planned.update(tasks)
         order = sorted(tasks, key=lambda name: -_expected_cost(name, tasks[name]))
-        return dict(zip(order, Parallel(n_jobs=self.diagnosis.n_jobs, prefer="threads")(
-            delayed(self._announced)(k, tasks[k]) for k in order)))
+        with one_blas_thread():
+            return dict(zip(order, Parallel(n_jobs=self.diagnosis.n_jobs, prefer="threads")(
+                delayed(self._announced)(k, tasks[k]) for k in order)))
 
     def _announced(self, name, task):
         # Each candidate says when it is done (from its worker thread): the

@@ -333,7 +333,8 @@ def integrator_kernels(functions=()):
         # numba reads a kernel's globals when it compiles, so every copy,
         # made in the shared namespace, calls the other copies.
         for name in ("_force", "_total_force_and_rates", "_element_derivatives", "_initial_tangents",
-                     "_tangent_step", "newmark_run", "stateless_forces"):
+                     "_tangent_step", "_stateless_run", "_one_state_run", "newmark_run",
+                     "stateless_forces"):
             py = globals()[name].py_func
             namespace[name] = njit(nogil=True)(types.FunctionType(py.__code__, namespace, py.__name__))
         # Keep the functions alive with the key so their ids are never reused.
@@ -525,6 +526,150 @@ def _tangent_step(tangents, param_of, y1, yd1, ydd1, z1, h, m, c, k, kinds, p_of
 # Integrator
 # --------------------------------------------------------------------------
 @njit(**_JIT)
+def _stateless_run(u, n_steps, h, m, c, k, kinds, p_off, params, y, yd, ydd, peak, y_out, yd_out, rtol, max_iter):
+    """``newmark_run`` without internal states or sensitivities: the same
+    operations in the same order on scalars (bit-identical results), as the
+    array bookkeeping of the general loop cost more than the arithmetic
+    (a linear step took 64 ns, a cubic spring's 98 ns)."""
+    n_u = u.shape[0]
+    n_out = y_out.shape[0]
+    c_acc = 4.0 / (h * h)
+    c_vel = 2.0 / h
+    jac_lin = m * c_acc + c * c_vel + k
+    no_z = np.zeros(0)
+    dfdz = np.zeros(0)
+    n_failed = 0
+    n_iter = 0
+    for i in range(n_steps + 1):
+        if i < n_out:
+            y_out[i] = y
+            yd_out[i] = yd
+        if i == n_steps:
+            break
+        u1 = u[(i + 1) % n_u]
+        q = y + h * yd + 0.25 * h * h * ydd
+        converged = False
+        for it in range(max_iter):
+            n_iter += 1
+            yd1 = c_vel * (q - y) - yd
+            ydd1 = c_acc * (q - y - h * yd) - ydd
+            res = m * ydd1 + c * yd1 + k * q - u1
+            jac = jac_lin
+            for e in range(kinds.shape[0]):
+                f, dfdy, dfdyd = _force(kinds[e], params, p_off[e], p_off[e + 1], q, yd1, no_z, 0, dfdz)
+                res += f
+                jac += dfdy + dfdyd * c_vel
+            step = -res / jac
+            q += step
+            if not np.isfinite(q):
+                break
+            if abs(step) <= rtol * max(abs(q), peak):
+                converged = True
+                break
+        if not converged:
+            n_failed += 1
+        yd1 = c_vel * (q - y) - yd
+        ydd = c_acc * (q - y - h * yd) - ydd
+        y = q
+        yd = yd1
+        peak = max(peak, abs(y))
+    return y, yd, ydd, n_failed, n_iter
+
+
+@njit(**_JIT)
+def _one_state_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, y, yd, ydd, z, zd, y_out, yd_out, z_out,
+                   rtol, max_iter):
+    """``newmark_run`` with one internal state and no sensitivities (a
+    hysteresis, a stiffness drift's clock, a series damper, with any
+    stateless elements): the 2 x 2 Newton step of the general loop on
+    scalars, the same operations in the same order (bit-identical
+    results).  In the general loop every array access of the Newton
+    matrix was a load and a store the compiler could not keep in
+    registers: 100 ns per iteration where the arithmetic needs 10."""
+    n_u = u.shape[0]
+    n_out = y_out.shape[0]
+    c_acc = 4.0 / (h * h)
+    c_vel = 2.0 / h
+    jac_lin = m * c_acc + c * c_vel + k
+    zq = np.zeros(1)
+    dfdz = np.zeros(1)
+    g = np.zeros(1)
+    dgdy = np.zeros(1)
+    dgdyd = np.zeros(1)
+    dgdz = np.zeros((1, 1))
+    peak_y = abs(y)
+    peak_z = abs(z[0])
+    n_failed = 0
+    n_iter = 0
+    for i in range(n_steps + 1):
+        if i < n_out:
+            y_out[i] = y
+            yd_out[i] = yd
+            z_out[i, 0] = z[0]
+        if i == n_steps:
+            break
+        u1 = u[(i + 1) % n_u]
+        q0 = y + h * yd + 0.25 * h * h * ydd
+        q1 = z[0] + 0.5 * h * zd[0]
+        converged = False
+        for it in range(max_iter):
+            n_iter += 1
+            yd1 = c_vel * (q0 - y) - yd
+            ydd1 = c_acc * (q0 - y - h * yd) - ydd
+            r0 = m * ydd1 + c * yd1 + k * q0 - u1
+            r1 = 0.0
+            j00 = jac_lin
+            j01 = 0.0
+            j10 = 0.0
+            j11 = 0.0
+            zq[0] = q1
+            for e in range(kinds.shape[0]):
+                a, b = z_off[e], z_off[e + 1]
+                f, dfdy, dfdyd = _force(kinds[e], params, p_off[e], p_off[e + 1], q0, yd1, zq, a, dfdz)
+                r0 += f
+                j00 += dfdy + dfdyd * c_vel
+                if b > a:
+                    j01 = dfdz[0]
+                    _rate(kinds[e], params, p_off[e], q0, yd1, zq, a, b, g, dgdy, dgdyd, dgdz)
+                    r1 = q1 - z[0] - 0.5 * h * (zd[0] + g[0])
+                    j10 = -0.5 * h * (dgdy[0] + dgdyd[0] * c_vel)
+                    j11 = -0.5 * h * dgdz[0, 0]
+                    j11 += 1.0
+            r0 = -r0
+            r1 = -r1
+            # _solve2_inplace on scalars
+            if abs(j10) > abs(j00):
+                a00, a01, b0, a10, a11, b1 = j10, j11, r1, j00, j01, r0
+            else:
+                a00, a01, b0, a10, a11, b1 = j00, j01, r0, j10, j11, r1
+            f = a10 / a00
+            if f != 0.0:
+                a11 -= f * a01
+                b1 -= f * b0
+            x1 = b1 / a11
+            x0 = (b0 - a01 * x1) / a00
+            q0 += x0
+            q1 += x1
+            if not (np.isfinite(q0) and np.isfinite(q1)):
+                break
+            if abs(x0) <= rtol * max(abs(q0), peak_y) and abs(x1) <= rtol * max(abs(q1), peak_z):
+                converged = True
+                break
+        if not converged:
+            n_failed += 1
+        yd1 = c_vel * (q0 - y) - yd
+        ydd = c_acc * (q0 - y - h * yd) - ydd
+        y = q0
+        yd = yd1
+        z[0] = q1
+        # Rates at the converged point, as the next step's trapezoid needs.
+        _total_force_and_rates(kinds, p_off, params, z_off, y, yd, z, zd, dfdz, dgdy, dgdyd, dgdz)
+        peak_y = max(peak_y, abs(y))
+        peak_z = max(peak_z, abs(z[0]))
+    return y, yd, ydd, n_failed, n_iter
+
+
+@njit(**_JIT)
 def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
                 init_accel, y_out, yd_out, z_out, rtol, max_iter, tangents, param_of, dy_out):
     """Integrate ``n_steps`` steps of length ``h`` from ``state`` (updated in place).
@@ -588,6 +733,23 @@ def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
         if n_dir > 0:
             _initial_tangents(tangents, param_of, y, yd, ydd, z, m, c, k, kinds, p_off, params, z_off,
                               dfdz, g, dgdy, dgdyd, dgdz, dfdp, dgdp)
+
+    if nz == 0 and n_dir == 0:
+        y, yd, ydd, n_failed, n_iter = _stateless_run(u, n_steps, h, m, c, k, kinds, p_off, params, y, yd, ydd,
+                                                      abs(y), y_out, yd_out, rtol, max_iter)
+        state[STATE_Y] = y
+        state[STATE_YD] = yd
+        state[STATE_YDD] = ydd
+        return n_failed, n_iter
+    if nz == 1 and n_dir == 0:
+        y, yd, ydd, n_failed, n_iter = _one_state_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, y, yd,
+                                                      ydd, z, zd, y_out, yd_out, z_out, rtol, max_iter)
+        state[STATE_Y] = y
+        state[STATE_YD] = yd
+        state[STATE_YDD] = ydd
+        state[STATE_Z] = z[0]
+        state[STATE_Z + 1] = zd[0]
+        return n_failed, n_iter
 
     peak[0] = abs(y)
     for j in range(nz):

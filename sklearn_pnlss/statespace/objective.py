@@ -17,11 +17,10 @@ several threads: the compiled kernels and the BLAS products release the GIL.
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
-from threadpoolctl import ThreadpoolController
+
+from ..utils.threads import one_blas_thread
 
 __all__ = ["SimulationError", "weigh"]
-
-_BLAS = None  # ThreadpoolController, made once: each one scans the loaded libraries (tens of ms)
 
 # Bytes of Jacobian held at once per thread: the rows of a segment are taken
 # this many at a time. Large enough that each block's J^T J runs at the BLAS
@@ -82,13 +81,9 @@ class SimulationError:
             return [function(self.segments)]
         bounds = np.linspace(0, len(self.segments), self.n_threads + 1).astype(int)
         chunks = [self.segments[a:b] for a, b in zip(bounds[:-1], bounds[1:])]
-        # One BLAS thread per segment thread: a multithreaded J'J in each
-        # would oversubscribe the cores (measured, 20 Bouc-Wen realisations,
-        # 2 cores: 10 s per 10 iterations instead of 4 s; 8 s unthreaded).
-        global _BLAS
-        if _BLAS is None:
-            _BLAS = ThreadpoolController()
-        with _BLAS.limit(limits=1, user_api="blas"), ThreadPoolExecutor(self.n_threads) as pool:
+        # One BLAS thread per segment thread (see one_blas_thread; unthreaded,
+        # the 20 Bouc-Wen realisations took 8 s per 10 iterations).
+        with one_blas_thread(), ThreadPoolExecutor(self.n_threads) as pool:
             return list(pool.map(function, chunks))
 
     def residual(self, model):

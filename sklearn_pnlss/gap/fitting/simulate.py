@@ -243,9 +243,14 @@ def measured_starts(y_list, velocity_list, n_periods, period):
             for y, v, P in zip(y_list, velocity_list, n_periods)]
 
 
-def _steady(osc, u_fine, fs_fine, max_periods=MAX_PERIODS, max_abs=None, start=None):
+def _steady(osc, u_fine, fs_fine, max_periods=MAX_PERIODS, max_abs=None, start=None, near=None):
+    """The periodic steady state, searched from ``near`` (a whole integrator
+    state of this oscillator's layout) where given, else from ``start``
+    (displacement and velocity; internal states at zero), else from rest."""
     initial = None
-    if start is not None:
+    if near is not None and near.shape == (STATE_Z + 2 * osc.n_internal_states,):
+        initial = near
+    elif start is not None:
         initial = np.zeros(STATE_Z + 2 * osc.n_internal_states)
         initial[:2] = start  # internal states at zero; rates follow from the equation of motion
     return osc.simulate_fine(u_fine, fs=fs_fine, periodic=True, tol=STEADY_TOL, max_periods=max_periods,
@@ -253,29 +258,32 @@ def _steady(osc, u_fine, fs_fine, max_periods=MAX_PERIODS, max_abs=None, start=N
 
 
 def _fine_response(osc, u_fine, P, fs_fine, transform, max_periods=MAX_PERIODS, max_abs=None, start=None,
-                   record=False):
-    """Displacement at the integration rate over the whole signal, whether
-    it is periodic (its decimation circular), and the steady state it
-    repeats (the integrator's state at its period start; None for a
-    signal from rest or a time-varying oscillator)."""
+                   record=False, near=None):
+    """Displacement at the integration rate, whether it is periodic (its
+    decimation circular), the steady state it repeats (the integrator's
+    state at its period start; None for a signal from rest or a
+    time-varying oscillator) and how many times the displacement repeats
+    over the signal (a steady state's one period is decimated once, then
+    repeated: decimating the whole record cost a third of a fit's trial
+    simulation)."""
     periodic = P > 0
     if transform is not None:
         u_fine = transform(u_fine, fs_fine, periodic)
     if not periodic:
-        return osc.simulate_fine(u_fine, fs=fs_fine, periodic=False, max_abs=max_abs).y, False, None
+        return osc.simulate_fine(u_fine, fs=fs_fine, periodic=False, max_abs=max_abs).y, False, None, 1
     if not osc.time_varying:
-        steady = _steady(osc, u_fine, fs_fine, max_periods, max_abs, start)
+        steady = _steady(osc, u_fine, fs_fine, max_periods, max_abs, start, near)
         if record:
             # where the search ended, on: a response that never settles
             # (chaos) differs from period to period, as measured; one
             # period more says whether the record is periodic
             y = osc.simulate_fine(np.tile(u_fine, P + 1), fs=fs_fine, periodic=False,
                                   initial_state=steady.final_state, max_abs=max_abs).y
-            return y[:-u_fine.size], _repeats(y, P + 1), None
-        return np.tile(steady.y, P), True, steady.final_state
+            return y[:-u_fine.size], _repeats(y, P + 1), None, 1
+        return steady.y, True, steady.final_state, P
     start = _steady(_frozen(osc), u_fine, fs_fine, max_periods, max_abs, start).final_state
     return osc.simulate_fine(np.tile(u_fine, P), fs=fs_fine, periodic=False,
-                             initial_state=_continuation_state(osc, start), max_abs=max_abs).y, False, None
+                             initial_state=_continuation_state(osc, start), max_abs=max_abs).y, False, None, 1
 
 
 @lru_cache(maxsize=1)
@@ -296,7 +304,7 @@ def _each_signal(func, *columns):
 
 
 def simulate_signals(osc, signals, transform=None, *, noise_rms=0.0, random_state=None,
-                     max_periods=MAX_PERIODS, max_abs=None, record=False, steady_states=None):
+                     max_periods=MAX_PERIODS, max_abs=None, record=False, steady_states=None, near=None):
     """Simulate ``osc`` on every signal of a :class:`SignalSet`.
 
     Parameters
@@ -330,6 +338,14 @@ def simulate_signals(osc, signals, transform=None, *, noise_rms=0.0, random_stat
         When a list, filled with each signal's steady state (the
         integrator's state at its period start, None where there is none):
         :func:`simulate_sensitivities` at the same parameters starts there.
+    near : list, default=None
+        Per signal, a steady state at nearby parameters (as
+        ``steady_states`` fills it; None where unknown) to start the
+        search from instead of the measured start: a fit's trial point
+        starts from the orbit of the point it moves away from, whose
+        internal states (a hysteresis loop's) are settled already
+        (measured: the hysteresis candidate's searches took 7 to 12
+        periods from the measured start, 2 to 3 from there).
 
     Returns
     -------
@@ -339,20 +355,31 @@ def simulate_signals(osc, signals, transform=None, *, noise_rms=0.0, random_stat
     """
     rng = check_random_state(random_state)
     fs_fine = signals.fs * signals.oversampling
-    out = []
     starts = signals.starts or [None] * len(signals.u_fine)
-    responses = _each_signal(lambda u_fine, P, start: _fine_response(
-        osc, u_fine, P, fs_fine, transform, max_periods, max_abs, start, record), signals.u_fine,
-        signals.n_periods, starts)
-    for y_fine, circular, steady in responses:
+
+    def decimated(y_fine, circular, repeats):
+        if signals.oversampling > 1:
+            y_fine = decimate_fir(y_fine, signals.decimation, periodic=circular)
+        return np.tile(y_fine, repeats) if repeats > 1 else y_fine
+
+    def one(u_fine, P, start, orbit):
+        y_fine, circular, steady, repeats = _fine_response(osc, u_fine, P, fs_fine, transform, max_periods,
+                                                           max_abs, start, record, orbit)
+        if noise_rms > 0:
+            # noise differs from period to period and comes from one
+            # generator in signal order: added to the whole record below
+            return np.tile(y_fine, repeats), circular, steady
+        return decimated(y_fine, circular, repeats), circular, steady
+
+    out = []
+    for y, circular, steady in _each_signal(one, signals.u_fine, signals.n_periods, starts,
+                                            near or [None] * len(signals.u_fine)):
         if steady_states is not None:
             steady_states.append(steady)
         if noise_rms > 0:
-            y_fine = y_fine + band_limited_noise(y_fine.size, fs=fs_fine, f_max=signals.fs / 2,
-                                                 rms=noise_rms, random_state=rng)
-        if signals.oversampling > 1:
-            y_fine = decimate_fir(y_fine, signals.decimation, periodic=circular)
-        out.append(y_fine)
+            y = decimated(y + band_limited_noise(y.size, fs=fs_fine, f_max=signals.fs / 2, rms=noise_rms,
+                                                 random_state=rng), circular, 1)
+        out.append(y)
     if signals.correction is not None:
         out = [y + c for y, c in zip(out, signals.correction)]
     return out
