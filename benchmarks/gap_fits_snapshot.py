@@ -36,7 +36,7 @@ def snapshot(family, name, strength, seed):
     nominal = cases._nominal(family, u, y, period, seed)
     diagnosis = GapDiagnosis(nominal, fs=cases.FS, period=period, n_jobs=2, random_state=seed).fit(u, y)
     report = diagnosis.report(u_val, y_val)
-    return dict(best=report.best_effect, delay_s=None if diagnosis.delay_ is None else diagnosis.delay_["delay_s"],
+    return dict(best=report.best_effect, delay_s=None if diagnosis.delay_ is None else diagnosis.delay_.delay_s,
                 fits={f.effect.name: dict(theta=[float(t) for t in f.theta], train_mse=f.train_mse,
                                           n_evaluations=f.n_evaluations, refined=f.refined)
                       for f in diagnosis.fits_ + diagnosis.combinations_},

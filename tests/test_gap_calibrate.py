@@ -8,6 +8,7 @@ from scipy.optimize import least_squares
 
 from sklearn_pnlss.gap.fitting.calibrate import (_Objective, _refit_without_outliers, _solve, fit_effect,
                                                  meaningful_ftol, outlying_signals, parameter_covariance,
+                                                 parameter_information,
                                                  per_signal_mse, per_signal_sensitivity, stalled_near_noise)
 from sklearn_pnlss.gap.candidates.effects import CubicSpring, Scales, delay_signal, make_effect
 from sklearn_pnlss.gap.settings import SETTINGS
@@ -134,7 +135,8 @@ def test_parameter_covariance_matches_the_spread_over_noise_draws(train):
         fit = fit_effect(make_effect("cubic_stiffness"), NOMINAL, scales, train, y, max_nfev=20, ftol=1e-12)
         noise = np.concatenate([a - b for a, b in zip(y, clean)])
         floor = NoiseFloor(float(np.mean(noise**2)), np.zeros(1), 1.0)
-        cov = parameter_covariance(fit, NOMINAL, scales, train, y, floor)
+        fit.information = parameter_information(fit, NOMINAL, scales, train, y)
+        cov = parameter_covariance(fit, scales, floor)
         estimates.append(fit.physical["k3"])
         predicted.append(np.sqrt(cov[0, 0]) * scales.force / scales.displacement**3)
     ratio = np.std(estimates, ddof=1) / np.mean(predicted)

@@ -121,7 +121,7 @@ def test_offsets_and_a_sensor_delay_are_not_blamed_on_physics():
     y, y_val = [x + 3e-4 for x in y], [x + 3e-4 for x in y_val]
     diag = GapDiagnosis(TRUE, effects=EFFECTS + ["input_delay"], **FAST).fit(u, y)
     report = diag.report(u_val, y_val)
-    assert diag.delay_ is not None and diag.delay_["delay_s"] == pytest.approx(delay, rel=0.02)
+    assert diag.delay_ is not None and diag.delay_.delay_s == pytest.approx(delay, rel=0.02)
     assert report.best_effect == "cubic_stiffness"
     assert report.ranking[0].closure > 0.95
     assert report.ranking[0].params["delay_s"] == pytest.approx(delay, rel=0.01)
@@ -141,7 +141,7 @@ def test_a_nominal_error_seen_through_a_sensor_delay_is_a_recalibration(stiffnes
     u, y, u_val, y_val = _one_sample_late(real, seed=4)
     diag = GapDiagnosis(TRUE, effects=EFFECTS + ["input_delay"], **FAST).fit(u, y)
     report = diag.report(u_val, y_val)
-    assert diag.delay_ is not None and diag.delay_["delay_s"] == pytest.approx(delay, rel=0.02)
+    assert diag.delay_ is not None and diag.delay_.delay_s == pytest.approx(delay, rel=0.02)
     assert report.best_effect == expected
     assert report.ranking[0].closure > 0.95
     names = [r.name for r in report.ranking]
@@ -171,8 +171,8 @@ def test_a_delay_hidden_behind_a_dominant_backlash_is_found():
     first_look = next(f for f in diag.fits_ if f.effect.name == "input_delay")
     recal = next(f for f in diag.fits_ if f.effect.name == "recalibration")
     assert 10 * np.log10(recal.train_mse / first_look.train_mse) < 1.0  # the first look misses it
-    assert diag.delay_ is not None and diag.delay_["delay_s"] == pytest.approx(delay, rel=0.01)
-    assert diag.delay_["gain_db"] > 20
+    assert diag.delay_ is not None and diag.delay_.delay_s == pytest.approx(delay, rel=0.01)
+    assert diag.delay_.gain_db > 20 and diag.delay_.found_on == "backlash"
     assert report.best_effect == "backlash"
     assert report.ranking[0].closure > 0.95
     assert report.ranking[0].params["kb"] == pytest.approx(1e4, rel=0.01)

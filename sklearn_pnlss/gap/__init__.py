@@ -7,6 +7,7 @@ from .candidates.effect import EffectTerms
 from .candidates.effects import Effect, Scales, default_effects
 from .linear_nominal import linear_nominal
 from .report import GapReport
+from .results import ChannelDelay
 
-__all__ = ["GapDiagnosis", "GapReport", "RankedEffect", "Effect", "EffectTerms", "Scales", "default_effects",
-           "linear_nominal"]
+__all__ = ["GapDiagnosis", "GapReport", "RankedEffect", "ChannelDelay", "Effect", "EffectTerms", "Scales",
+           "default_effects", "linear_nominal"]

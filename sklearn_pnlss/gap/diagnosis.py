@@ -142,11 +142,12 @@ class GapDiagnosis(BaseEstimator):
     black_box_branches_ : list of dict
         Reading of each black-box branch on the training signals (see
         :func:`sklearn_pnlss.gap.fitting.black_box.branch_opinions`).
-    delay_ : dict or None
+    delay_ : ChannelDelay or None
         The delay between the force and displacement channels the training
-        data show (``delay_s``, seconds; ``gain_db``, how much it improves
-        the refitted nominal), fitted with every candidate; None when the
-        refit gains less than 1 dB from it.
+        data show (:class:`~sklearn_pnlss.gap.results.ChannelDelay`:
+        ``delay_s``, seconds; ``gain_db``, how much it improves the fit it
+        was found on; ``found_on``, that fit), fitted with every candidate;
+        None when no fit gains enough from it.
     train_gap_db_ : float
         Mean square training gap of the nominal simulator, dB.
     fit_time_ : float
@@ -307,7 +308,7 @@ class GapDiagnosis(BaseEstimator):
                       Recalibration(free) if free else None, settings)
         for stage in STAGES:
             stage(run)
-        effects, done, coarse, self.delay_ = run.effects, run.done, run.coarse, run.delay
+        effects, done, self.delay_ = run.effects, run.done, run.delay
         self.combinations_ = run.combinations
         self.fits_ = [done[e.name] for e in effects]
         self.black_box_, self.black_box_branches_ = done.get(BLACK_BOX), []
@@ -322,7 +323,6 @@ class GapDiagnosis(BaseEstimator):
         # Kept for report's "where" analysis (distortion level, drift, gap
         # against input level); passed on explicitly, read by no other module.
         self._train = (u_list, y_list)
-        self._fit_signals = coarse  # the training set as fitted: the parameters' covariance
         self._train_nominal = y_nominal
         self.fit_time_ = time.perf_counter() - start
         return self
@@ -466,8 +466,7 @@ class GapDiagnosis(BaseEstimator):
         fit = self.fits_[best]
         if y_effects[best] is None or not fit.effect.n_params:
             return []
-        cov = parameter_covariance(fit, self.nominal, self.scales_, self._fit_signals, self._train[1], noise,
-                                   self.offsets)
+        cov = parameter_covariance(fit, self.scales_, noise)
         rng = check_random_state(self.random_state)
         lower, upper = fit.effect.bounds
         draws = [np.clip(rng.multivariate_normal(fit.theta, cov, check_valid="ignore"), lower, upper)

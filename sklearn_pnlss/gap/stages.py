@@ -18,6 +18,8 @@ does and why; the thresholds it compares with are in
    still improves.
 6. :func:`added_effects`: a second and third effect added to the best one
    while it leaves a gap.
+7. :func:`information`: what the training data say about each final fit's
+   parameters, for the report's covariance.
 """
 import itertools
 from dataclasses import dataclass, field, replace
@@ -29,12 +31,13 @@ from scipy.stats import chi2
 from .candidates.clues import read_clues
 from .candidates.effects import InputDelay, delay_signal
 from .fitting.black_box import fit_black_box
-from .fitting.calibrate import at_rate, fit_effect, refine_fit
+from .fitting.calibrate import at_rate, fit_effect, parameter_information, refine_fit
+from .results import ChannelDelay
 from .settings import SETTINGS
 from ..utils.threads import one_blas_thread
 
 __all__ = ["Fitting", "STAGES", "measurement_chain", "all_candidates", "refine_contenders", "hidden_delay",
-           "polish_leader", "added_effects"]
+           "polish_leader", "added_effects", "information"]
 
 BLACK_BOX = "__black_box__"
 
@@ -120,7 +123,7 @@ class Fitting:
         if effect.is_recalibration:
             return self.recalibration
         effect = effect.with_recalibration(self.recalibration)
-        return effect if self.delay is None else effect.with_delay(InputDelay(), self.delay["theta"])
+        return effect if self.delay is None else effect.with_delay(InputDelay(), self.delay.samples)
 
     # -- tasks -----------------------------------------------------------------
     def fit_task(self, effect, clues=None, max_nfev=None, full_rate=False, refine=True):
@@ -242,12 +245,12 @@ def measurement_chain(run):
     recal, delay = run.done["recalibration"], run.done["input_delay"]
     gain_db = 10 * np.log10(recal.train_mse / delay.train_mse)
     if gain_db >= SETTINGS.delay_found_db:
-        run.delay = dict(theta=float(delay.theta[0]), delay_s=float(delay.physical["delay_s"]),
-                         gain_db=float(gain_db))
-        run.log(f"the data carry a delay of {1e3 * run.delay['delay_s']:.3g} ms "
-                f"({run.delay['gain_db']:.1f} dB better fit); it is fitted with every candidate")
-        run.clues = run.aligned_clues(run.delay["delay_s"])
-        run.effects = [e if e.name in run.done else e.with_delay(InputDelay(), run.delay["theta"]) for e in run.effects]
+        run.delay = ChannelDelay(float(delay.physical["delay_s"]), float(delay.theta[0]), float(gain_db),
+                                 "recalibration")
+        run.log(f"the data carry a delay of {1e3 * run.delay.delay_s:.3g} ms "
+                f"({run.delay.gain_db:.1f} dB better fit); it is fitted with every candidate")
+        run.clues = run.aligned_clues(run.delay.delay_s)
+        run.effects = [e if e.name in run.done else e.with_delay(InputDelay(), run.delay.samples) for e in run.effects]
         _recalibration_with_delay(run)
     refit = min(run.nested_fits(), key=lambda f: f.train_mse)
     run.coarse = run.train.coarse(d.fit_oversampling, *refit.effect.simulator(refit.theta, d.nominal, d.scales_)[:2])
@@ -365,10 +368,10 @@ def hidden_delay(run):
     gain_db = 10 * np.log10(done[best.name].train_mse / trial.train_mse)
     if gain_db < SETTINGS.hidden_delay_db:
         return
-    run.delay = dict(theta=float(trial.theta[-1]), delay_s=float(trial.physical["delay_s"]), gain_db=float(gain_db))
-    run.log(f"the data carry a delay of {1e3 * run.delay['delay_s']:.3g} ms, hidden behind {best.name} "
+    run.delay = ChannelDelay(float(trial.physical["delay_s"]), float(trial.theta[-1]), float(gain_db), best.name)
+    run.log(f"the data carry a delay of {1e3 * run.delay.delay_s:.3g} ms, hidden behind {best.name} "
             f"({gain_db:.1f} dB better fit with it); every candidate is refitted with it")
-    found = [run.delay["theta"]]
+    found = [run.delay.samples]
     refits = {e.name: run.fit_task(delayed_effect(e, aligned_starts(e, found)), max_nfev=max(3, d.max_nfev // 2))
               for e in rest if e is not best}
     done[best.name] = trial
@@ -490,5 +493,21 @@ def _pair_starts(raw_base, base, other, other_fit):
     return [np.concatenate([base.theta[:n_base], s, rest]) for s in (other_fit.theta[:n_other], other.starts[0])]
 
 
+def information(run):
+    """Every final fit's information on the training signals (one Jacobian
+    each, in parallel; see
+    :func:`~sklearn_pnlss.gap.fitting.calibrate.parameter_information`),
+    so that the report's parameter covariance reads it instead of fitting
+    again."""
+    d = run.diagnosis
+    fits = [f for name, f in run.done.items() if name != BLACK_BOX and f.effect.n_params] + run.combinations
+    with one_blas_thread():
+        found = Parallel(n_jobs=d.n_jobs, prefer="threads")(
+            delayed(parameter_information)(f, d.nominal, d.scales_, run.coarse, run.y_list, d.offsets) for f in fits)
+    for f, info in zip(fits, found):
+        f.information = info
+
+
 #: The stages of :meth:`GapDiagnosis.fit`, in order.
-STAGES = (measurement_chain, all_candidates, refine_contenders, hidden_delay, polish_leader, added_effects)
+STAGES = (measurement_chain, all_candidates, refine_contenders, hidden_delay, polish_leader, added_effects,
+          information)

@@ -16,7 +16,8 @@ from scipy.optimize import least_squares
 from .simulate import FIT_MAX_PERIODS, misfit, simulate_sensitivities, simulate_signals
 from ..settings import SETTINGS
 
-__all__ = ["EffectFit", "meaningful_ftol", "fit_effect", "refine_fit", "at_rate", "parameter_covariance"]
+__all__ = ["EffectFit", "meaningful_ftol", "fit_effect", "refine_fit", "at_rate", "parameter_information",
+           "parameter_covariance"]
 
 # Residual given to a trial point that diverges or is not physical, relative
 # to the displacement scale: far above any real misfit.
@@ -55,6 +56,11 @@ class EffectFit:
         refinement: candidates are compared with each other there (a
         coarse set's correction of the nominal's discretisation error
         leaves every candidate a like floor that a refined fit does not).
+    information : ndarray of shape (n_params, n_params) or None
+        The parameters' Gauss-Newton information on the training signals
+        (:func:`parameter_information`), filled once the diagnosis' fits
+        are final: the report's parameter covariance
+        (:func:`parameter_covariance`) needs no training data.
     """
 
     effect: object
@@ -68,6 +74,7 @@ class EffectFit:
     data_starts: list = field(default_factory=list)
     refined: bool = True
     coarse_mse: float = None
+    information: np.ndarray = None
 
 
 class _Objective:
@@ -285,26 +292,36 @@ def _refit_without_outliers(obj, theta, r, stalled, lower, upper, max_nfev, ftol
     return theta, r, None, n_used
 
 
-def parameter_covariance(fit, nominal, scales, signals, y_meas, noise, offsets=False):
-    """Covariance of a fit's dimensionless parameters, as far as its
-    training signals determine them under the output ``noise``
-    (:class:`~sklearn_pnlss.gap.verdict.noise_floor.NoiseFloor`).
-
-    The Gauss-Newton approximation ``sigma^2 (J^T J)^+ / nu``: ``J`` the
-    Jacobian of the training residuals (forward differences, one simulation
-    per parameter), ``sigma^2`` the noise variance and ``nu`` its
-    independent samples per sample (band-limited noise holds fewer than its
-    sample count).  The noise's variance, not the residual's: a candidate
-    that misses the data is not made uncertain by its own misfit (whose
-    spread would then excuse it on a validation signal).  A direction the
-    data do not see gets the pseudo-inverse's zero, not an infinite spread.
-    """
+def parameter_information(fit, nominal, scales, signals, y_meas, offsets=False):
+    """The Gauss-Newton information ``J^T J`` of a fit's dimensionless
+    parameters on its training signals: ``J`` the Jacobian of the training
+    residuals in displacement scales (one simulation with the integrator's
+    sensitivities, or one per parameter where it differences).  What the
+    data say about the parameters, before the noise is known
+    (:func:`parameter_covariance`)."""
     obj = _Objective(fit.effect, nominal, scales, signals, y_meas, offsets)
     theta = np.asarray(fit.theta, float)
     lower, upper = fit.effect.bounds
     J = obj.jacobian(theta, obj(theta), lower, upper)
+    return J.T @ J
+
+
+def parameter_covariance(fit, scales, noise):
+    """Covariance of a fit's dimensionless parameters, as far as its
+    training signals determine them (its ``information``, see
+    :func:`parameter_information`) under the output ``noise``
+    (:class:`~sklearn_pnlss.gap.verdict.noise_floor.NoiseFloor`).
+
+    The Gauss-Newton approximation ``sigma^2 (J^T J)^+ / nu``: ``sigma^2``
+    the noise variance and ``nu`` its independent samples per sample
+    (band-limited noise holds fewer than its sample count).  The noise's
+    variance, not the residual's: a candidate that misses the data is not
+    made uncertain by its own misfit (whose spread would then excuse it on
+    a validation signal).  A direction the data do not see gets the
+    pseudo-inverse's zero, not an infinite spread.
+    """
     variance = noise.variance / scales.displacement**2
-    return variance * np.linalg.pinv(J.T @ J) / max(noise.dof_per_sample, 1e-3)
+    return variance * np.linalg.pinv(fit.information) / max(noise.dof_per_sample, 1e-3)
 
 
 def meaningful_ftol(noise, n_samples):
