@@ -18,7 +18,7 @@ from sklearn_pnlss.gap.fitting.simulate import (
     prime_factors,
     simulate_signals,
 )
-from sklearn_pnlss.gap.where import content_limit, signal_derivative
+from sklearn_pnlss.gap.readings import content_limit, signal_derivative
 from sklearn_pnlss.physics.oscillator import STATE_Z
 from sklearn_pnlss.physics.resampling import decimate_fir, upsample_fft
 from sklearn_pnlss.physics import (

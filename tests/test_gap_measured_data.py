@@ -9,7 +9,8 @@ from sklearn_pnlss.gap import GapDiagnosis, linear_nominal
 from sklearn_pnlss.gap.candidates.clues import DataClues, backlash_start, read_clues
 from sklearn_pnlss.gap.candidates.effects import Backlash, Recalibration, Scales, delay_signal, make_effect
 from sklearn_pnlss.gap.report import GapReport
-from sklearn_pnlss.gap.fitting.simulate import SignalSet, misfit, simulate_signals
+from sklearn_pnlss.gap.fitting.simulate import SignalSet, simulate_signals
+from sklearn_pnlss.gap.readings import misfit
 from sklearn_pnlss.gap.candidates.stiffness_start import measured_stiffness_change
 from sklearn_pnlss.physics import CoupledMass, CubicStiffness, DeadZoneSpring, Oscillator
 from sklearn_pnlss.signals import multisine

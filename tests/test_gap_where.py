@@ -10,7 +10,8 @@ import pytest
 
 from sklearn_pnlss.gap.verdict.noise_floor import NoiseFloor, estimate_noise
 from sklearn_pnlss.gap.fitting.simulate import SignalSet, simulate_signals
-from sklearn_pnlss.gap.where import content_limit, locate_gap, missing_force, signal_derivative
+from sklearn_pnlss.gap.readings import content_limit, missing_force, signal_derivative
+from sklearn_pnlss.gap.where import locate_gap
 from sklearn_pnlss.physics import BoucWen, Oscillator
 from sklearn_pnlss.signals import linear_chirp, multisine
 

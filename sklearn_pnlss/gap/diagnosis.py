@@ -22,8 +22,9 @@ from .candidates.effects import NOMINAL_PARAMETERS, Recalibration, Scales, defau
 from .verdict.noise_floor import (estimate_noise, non_excited_noise, repeated_input_noise,
                                   residual_noise, unsettled_signals)
 from .report import GapReport
-from .fitting.simulate import SignalSet, detect_period, measured_starts, misfit, simulate_signals
-from .where import locate_gap, signal_derivative
+from .fitting.simulate import SignalSet, detect_period, measured_starts, simulate_signals
+from .readings import misfit, signal_derivative
+from .where import locate_gap
 from .stages import BLACK_BOX, STAGES, Fitting
 from .settings import SETTINGS
 

@@ -11,8 +11,9 @@ from scipy.signal import hilbert
 
 from ..frequency.bla import excited_lines, periodic_bla
 from ..utils.validation import is_periodic
+from .readings import content_limit, missing_force, periods_of, signal_derivative
 
-__all__ = ["signal_derivative", "content_limit", "missing_force", "locate_gap"]
+__all__ = ["locate_gap"]
 
 N_BANDS = 8
 N_LEVELS = 8
@@ -21,59 +22,14 @@ MIN_PER_CELL = 20
 N_WINDOWS = 40
 
 
-def _band_limit(n, fs, f_max):
-    """DFT bins of an n-sample record kept by a low-pass at f_max."""
-    f = np.fft.rfftfreq(n, 1 / fs)
-    return f <= f_max
-
-
-def signal_derivative(y, fs, n_periods, period, order=1, f_max=None):
-    """Time derivative of a sampled displacement by the DFT.
-
-    A periodic record (``n_periods > 0``) is differentiated exactly; any
-    other record is extended by its mirror image first so that its ends do
-    not ring.  Bins above ``f_max`` (default: Nyquist) are dropped, which
-    keeps the noise's high-frequency part from dominating accelerations.
-    """
-    y = np.asarray(y, float)
-    n = y.size
-    if n_periods:
-        ext = y
-    else:
-        ext = np.concatenate([y, y[::-1]])
-    spec = np.fft.rfft(ext)
-    w = 2 * np.pi * np.fft.rfftfreq(ext.size, 1 / fs)
-    spec = spec * (1j * w) ** order
-    if f_max is not None:
-        spec[~_band_limit(ext.size, fs, f_max)] = 0
-    if ext.size % 2 == 0:
-        spec[-1] = 0  # the Nyquist bin has no defined derivative
-    return np.fft.irfft(spec, ext.size)[:n]
-
-
-def content_limit(u_list, fs):
-    """Highest frequency worth differentiating: three times the input band
-    (harmonics of a nonlinearity) capped at 80 % of Nyquist."""
-    f_in = 0.0
-    for u in u_list:
-        p = np.abs(np.fft.rfft(u - u.mean())) ** 2
-        cum = np.cumsum(p) / max(p.sum(), 1e-300)
-        f_in = max(f_in, np.fft.rfftfreq(u.size, 1 / fs)[np.searchsorted(cum, 0.999)])
-    return min(3 * f_in, 0.4 * fs)
-
-
-def _periods(x, P, period):
-    return x[: P * period].reshape(P, period)
-
-
 def _frequency_analysis(u_list, y_list, y_nominal, n_periods, period, fs, noise, significance,
                         u_train, y_train):
     """Gap spectrum of the periodic validation signals per band and line kind."""
     picks = [i for i, P in enumerate(n_periods) if P]
     if not picks or noise is None:
         return None
-    U = np.stack([np.fft.rfft(_periods(u_list[i], n_periods[i], period).mean(0)) for i in picks])
-    E = np.stack([np.fft.rfft(_periods(y_list[i] - y_nominal[i], n_periods[i], period).mean(0))
+    U = np.stack([np.fft.rfft(periods_of(u_list[i], n_periods[i], period).mean(0)) for i in picks])
+    E = np.stack([np.fft.rfft(periods_of(y_list[i] - y_nominal[i], n_periods[i], period).mean(0))
                   for i in picks]) / np.sqrt(period)
     P = np.array([n_periods[i] for i in picks], float)[:, None]
     lines = excited_lines(U[:, :, None])
@@ -165,37 +121,6 @@ def _amplitude_analysis(u_list, y_list, y_nominal, velocity, noise, train):
     return out
 
 
-def missing_force(nominal, u_list, y_list, n_periods, period, fs, f_max):
-    """The force the nominal equation of motion leaves unbalanced along the
-    measured motion: ``u - m ydd - c yd - k y - F(y, yd)``.
-
-    The derivatives of the measured displacement are taken by the DFT,
-    band-limited to ``f_max``; periodic signals are averaged over their
-    periods first (the noise drops by their number), the ends of the others
-    are trimmed (they ring).  Stateful nominal elements are left out: their
-    states are not measured.
-
-    Returns
-    -------
-    y, yd, ydd, force : ndarray
-        Displacement, velocity, acceleration and missing force, all signals
-        concatenated.
-    """
-    ys, vs, acc, fm = [], [], [], []
-    for u, y, P in zip(u_list, y_list, n_periods):
-        if P:
-            u, y = _periods(u, P, period).mean(0), _periods(y, P, period).mean(0)
-        v = signal_derivative(y, fs, P, period, 1, f_max)
-        a = signal_derivative(y, fs, P, period, 2, f_max)
-        yf = signal_derivative(y, fs, P, period, 0, f_max)
-        trim = slice(None) if P else slice(y.size // 50, y.size - y.size // 50)
-        fm.append((u - nominal.mass * a - nominal.restoring_force(yf, v))[trim])
-        ys.append(yf[trim])
-        vs.append(v[trim])
-        acc.append(a[trim])
-    return tuple(map(np.concatenate, (ys, vs, acc, fm)))
-
-
 def _force_map(nominal, u_list, y_list, n_periods, period, fs, f_max):
     """Mean missing force (see :func:`missing_force`) over the
     (displacement, velocity) plane; stateful nominal elements are flagged."""
@@ -237,7 +162,7 @@ def _time_analysis(u_list, y_list, y_nominal, n_periods, period, fs, noise, y_tr
     changes = []
     for y in y_train:
         if is_periodic(y.size, period) and y.size >= 3 * period:
-            Yp = _periods(y, y.size // period, period)
+            Yp = periods_of(y, y.size // period, period)
             changes.append([np.mean((Yp[p] - Yp[0]) ** 2) for p in range(1, Yp.shape[0])])
     if changes and noise is not None:
         width = min(len(c) for c in changes)

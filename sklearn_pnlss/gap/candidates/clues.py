@@ -6,7 +6,7 @@ Two readings of the measurements against the nominal simulator:
   :mod:`sklearn_pnlss.gap.candidates.stiffness_start`), which linear candidates (a
   second mode, recalibration) are fitted to first;
 * the missing force along the measured motion (see
-  :func:`sklearn_pnlss.gap.where.missing_force`), a restoring-force
+  :func:`sklearn_pnlss.gap.readings.missing_force`), a restoring-force
   surface to which a stateless force law can be fitted directly.
 
 A needle-shaped minimum, such as a stiff backlash spring whose clearance is
@@ -22,7 +22,7 @@ from scipy.optimize import minimize_scalar
 from ...physics import Oscillator
 from .effect import recalibration_unit
 from .stiffness_start import measured_stiffness_change
-from ..where import content_limit, missing_force
+from ..readings import content_limit, missing_force
 
 __all__ = ["DataClues", "read_clues", "backlash_start", "force_law_start"]
 

@@ -13,7 +13,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy.optimize import least_squares
 
-from .simulate import FIT_MAX_PERIODS, misfit, simulate_sensitivities, simulate_signals
+from .simulate import FIT_MAX_PERIODS, simulate_sensitivities, simulate_signals
+from ..readings import misfit
 from ..settings import SETTINGS
 
 __all__ = ["EffectFit", "meaningful_ftol", "fit_effect", "refine_fit", "at_rate", "parameter_information",

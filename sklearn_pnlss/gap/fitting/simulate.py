@@ -26,16 +26,7 @@ from ...physics.resampling import decimate_columns, decimate_fir, upsample_fft
 from ...utils.validation import is_periodic
 
 __all__ = ["SignalSet", "simulate_signals", "simulate_sensitivities", "measured_starts", "prime_factors",
-           "detect_period", "misfit"]
-
-
-def misfit(y_sim, y_meas, offsets=False):
-    """Simulation minus measurement of one signal; with ``offsets``, less
-    its mean: the best constant sensor offset of that record is then
-    granted to every model alike (a displacement sensor's zero is rarely
-    known, and a constant says nothing about the structure)."""
-    r = np.asarray(y_sim) - np.asarray(y_meas)
-    return r - r.mean() if offsets else r
+           "detect_period"]
 
 
 def prime_factors(n):

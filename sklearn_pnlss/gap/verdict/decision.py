@@ -48,7 +48,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from .noise_floor import gap_test
-from ..fitting.simulate import misfit
+from ..readings import misfit
 from ..settings import SETTINGS
 
 __all__ = ["RankedEffect", "Decision", "decide"]
