@@ -325,8 +325,12 @@ def hidden_delay(run):
     -70 dB), so the first look misses it.  The delay is looked for again
     on the best refined candidate: if freeing it gains ``hidden_delay_db``
     there, it belongs to the measurement chain and every candidate is
-    refitted with it, from its own fit and from its clues aligned at that
-    delay (with half the iterations: most of them start close).  Skipped
+    refitted with it at the fitting rate, from its own fit and from its
+    clues aligned at that delay (with half the iterations: most of them
+    start close), and those in contention are refined as after the first
+    fits (:func:`refine_contenders`; refining all of them was half of the
+    stage's time, on the stiff backlash of family d 48 of a diagnosis'
+    87 s).  Skipped
     when the best candidate already sits within ``hidden_delay_db`` of the
     noise floor: no delay could gain that.
     """
@@ -372,12 +376,14 @@ def hidden_delay(run):
     run.log(f"the data carry a delay of {1e3 * run.delay.delay_s:.3g} ms, hidden behind {best.name} "
             f"({gain_db:.1f} dB better fit with it); every candidate is refitted with it")
     found = [run.delay.samples]
-    refits = {e.name: run.fit_task(delayed_effect(e, aligned_starts(e, found)), max_nfev=max(3, d.max_nfev // 2))
+    refits = {e.name: run.fit_task(delayed_effect(e, aligned_starts(e, found)), max_nfev=max(3, d.max_nfev // 2),
+                                   refine=False)
               for e in rest if e is not best}
     done[best.name] = trial
     done.update(run.run(refits))
     # the effects as refitted, the delay free in each
     run.effects = [e if e.name in measured else done[e.name].effect for e in run.effects]
+    refine_contenders(run)  # as after the first fits: the others cannot lead
 
 
 def polish_leader(run):
