@@ -522,6 +522,13 @@ def _tangent_step(tangents, param_of, y1, yd1, ydd1, z1, h, m, c, k, kinds, p_of
         _rate_tangents(s, pi, nz, dgdy, dgdyd, dgdz, dgdp)
 
 
+@njit(**_INLINE)
+def _end_rates(q, y, yd, ydd, h, c_vel, c_acc):
+    """Velocity and acceleration at a step's end whose displacement is
+    ``q`` (Newmark's average acceleration from ``y, yd, ydd``)."""
+    return c_vel * (q - y) - yd, c_acc * (q - y - h * yd) - ydd
+
+
 # --------------------------------------------------------------------------
 # Integrator
 # --------------------------------------------------------------------------
@@ -551,8 +558,7 @@ def _stateless_run(u, n_steps, h, m, c, k, kinds, p_off, params, y, yd, ydd, pea
         converged = False
         for it in range(max_iter):
             n_iter += 1
-            yd1 = c_vel * (q - y) - yd
-            ydd1 = c_acc * (q - y - h * yd) - ydd
+            yd1, ydd1 = _end_rates(q, y, yd, ydd, h, c_vel, c_acc)
             res = m * ydd1 + c * yd1 + k * q - u1
             jac = jac_lin
             for e in range(kinds.shape[0]):
@@ -568,8 +574,7 @@ def _stateless_run(u, n_steps, h, m, c, k, kinds, p_off, params, y, yd, ydd, pea
                 break
         if not converged:
             n_failed += 1
-        yd1 = c_vel * (q - y) - yd
-        ydd = c_acc * (q - y - h * yd) - ydd
+        yd1, ydd = _end_rates(q, y, yd, ydd, h, c_vel, c_acc)
         y = q
         yd = yd1
         peak = max(peak, abs(y))
@@ -614,8 +619,7 @@ def _one_state_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, y, yd, y
         converged = False
         for it in range(max_iter):
             n_iter += 1
-            yd1 = c_vel * (q0 - y) - yd
-            ydd1 = c_acc * (q0 - y - h * yd) - ydd
+            yd1, ydd1 = _end_rates(q0, y, yd, ydd, h, c_vel, c_acc)
             r0 = m * ydd1 + c * yd1 + k * q0 - u1
             r1 = 0.0
             j00 = jac_lin
@@ -657,8 +661,7 @@ def _one_state_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, y, yd, y
                 break
         if not converged:
             n_failed += 1
-        yd1 = c_vel * (q0 - y) - yd
-        ydd = c_acc * (q0 - y - h * yd) - ydd
+        yd1, ydd = _end_rates(q0, y, yd, ydd, h, c_vel, c_acc)
         y = q0
         yd = yd1
         z[0] = q1
@@ -783,8 +786,7 @@ def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
         for it in range(max_iter):
             n_iter += 1
             y1 = q[0]
-            yd1 = c_vel * (y1 - y) - yd
-            ydd1 = c_acc * (y1 - y - h * yd) - ydd
+            yd1, ydd1 = _end_rates(y1, y, yd, ydd, h, c_vel, c_acc)
             for r in range(n):
                 for j in range(n):
                     jac[r, j] = 0.0
@@ -833,8 +835,7 @@ def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
             n_failed += 1
 
         y1 = q[0]
-        yd1 = c_vel * (y1 - y) - yd
-        ydd = c_acc * (y1 - y - h * yd) - ydd
+        yd1, ydd = _end_rates(y1, y, yd, ydd, h, c_vel, c_acc)
         y = y1
         yd = yd1
         for j in range(nz):
