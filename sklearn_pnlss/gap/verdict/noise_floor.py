@@ -325,27 +325,29 @@ def non_excited_noise(u_list, y_list, simulations, period, fs):
     """
     # segments change nothing for periodic records: retry only when one is not
     any_aperiodic = not all(is_periodic(u.size, period) for u in u_list)
+    data, n_grid = _records(u_list, y_list, period), _grid(u_list, period)
     for segment in (None, NOISE_SEGMENT) if any_aperiodic else (None,):
-        read = _read_non_excited(u_list, y_list, simulations, period, fs, segment)
-        if read != "no lines":
+        reads = _free_lines(data, u_list, period, fs, segment, n_grid)
+        if reads is not None:
             break
-    if read in (None, "no lines"):
+    if reads is None:
         return None
-    name, spectrum, n_lines, n_grid = read
+    best = _best_residual(data, simulations, u_list, period, fs, reads, n_grid)
+    if best is None:
+        return None
+    name, spectrum, n_lines = best
     pieces = f", read in Hann segments of {segment} samples" if segment else ""
     return _from_spectrum(spectrum, n_grid, source="non_excited_lines", upper_bound=True, detail=(
         f"residual of the {name} model at the {n_lines} DFT lines the input does not excite "
         f"(an upper bound; no period repeated{pieces})"))
 
 
-def _read_non_excited(u_list, y_list, simulations, period, fs, segment):
-    """The best model's residual at the lines free of input, the records
-    that are not periodic read whole or in ``segment``-sample pieces
-    (:func:`_segments`).  Returns ``(name, spectrum, n_lines, n_grid)``,
-    ``"no lines"`` when no band has enough free lines, or None when no
-    model gives a finite, nonzero level."""
-    data = _records(u_list, y_list, period)
-    reads = []  # per record: its segments, its window, each segment's lines free of input
+def _free_lines(data, u_list, period, fs, segment, n_grid):
+    """The lines free of input of each record (``data``, see
+    :func:`_records`), read whole or in ``segment``-sample pieces
+    (:func:`_segments`): per record its slices, its window and each slice's
+    usable bins; None when no band has enough of them."""
+    reads = []
     for (u, _, _), u_full in zip(data, u_list):
         slices, w = _segments(u.size, is_periodic(u_full.size, period), segment)
         masks = []
@@ -355,7 +357,14 @@ def _read_non_excited(u_list, y_list, simulations, period, fs, segment):
             usable[0] = False
             masks.append(usable)
         reads.append((slices, w, masks))
-    n_grid = _grid(u_list, period)
+    lines = [(np.zeros(m.size), m, sl.stop - sl.start) for slices, _, masks in reads for sl, m in zip(slices, masks)]
+    return None if _banded(lines, fs, n_grid)[0] is None else reads
+
+
+def _best_residual(data, simulations, u_list, period, fs, reads, n_grid):
+    """The model whose residual at the lines free of input (``reads``, see
+    :func:`_free_lines`) is smallest: ``(name, spectrum, n_lines)``, or
+    None when no model gives a finite, nonzero level."""
     best = None
     for name, sims in simulations.items():
         if sims is None:
@@ -367,14 +376,12 @@ def _read_non_excited(u_list, y_list, simulations, period, fs, segment):
         if not np.all([np.all(np.isfinite(p)) for p, _, _ in records]):
             continue
         spectrum, n_lines = _banded(records, fs, n_grid)
-        if spectrum is None:
-            return "no lines"  # the same lines for every model: none to read
         level = sum(p[m].sum() for p, m, _ in records) / max(sum(m.sum() for _, m, _ in records), 1)
         if best is None or level < best[0]:
             best = (level, name, spectrum, n_lines)
     if best is None or not best[0] > 0:
         return None  # nothing, or exactly nothing (noiseless data): no floor to speak of
-    return best[1], best[2], best[3], n_grid
+    return best[1:]
 
 
 def residual_noise(y_list, y_sim, n_grid, *, name="black box", source="black_box_residual"):

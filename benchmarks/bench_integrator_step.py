@@ -1,0 +1,84 @@
+"""What one integrator step costs, by force element.
+
+The gap diagnosis is mostly Newmark-Newton steps of the oscillator (see
+``bench_gap_time.py``).  This times the plain integration (no
+sensitivities) of one 8192-sample multisine period at 5 times the data rate
+(the diagnosis' fitting rate) from rest, for the nominal of
+``gap_withheld.py`` alone and with each force element of its cases, and
+prints nanoseconds per step (the median of 7 runs) and Newton iterations
+per step.  One thread: the cost of the arithmetic, not of the cores'
+sharing.
+
+    python benchmarks/bench_integrator_step.py --label after
+    git worktree add /tmp/before <commit>
+    PYTHONPATH=/tmp/before python benchmarks/bench_integrator_step.py --label before
+
+Each label's rows go to ``results/integrator_step.json`` (other labels
+kept), with the commit measured.
+"""
+import argparse
+import json
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from _bench_utils import RESULTS, header
+
+import gap_withheld as gw
+import sklearn_pnlss
+from sklearn_pnlss.physics import oscillator
+from sklearn_pnlss.physics.resampling import upsample_fft
+from sklearn_pnlss.signals import multisine
+
+RATE = 5  # the diagnosis' fitting rate, times the data rate
+ELEMENTS = {"linear": None, **{name: cases[0][0][0] for name, cases in gw.CASES.items()
+                               if name is not None and cases[0][0]}}
+
+
+def step_cost(element, u_fine, h, repeats=7):
+    """Median seconds per step and Newton iterations per step of a plain
+    run from rest."""
+    osc = gw.NOMINAL.with_forces(() if element is None else (element,))
+    kinds, p_off, params, z_off, _ = osc._packed
+    n, nz = u_fine.size, osc.n_internal_states
+    times, iterations = [], 0
+    for _ in range(repeats + 1):  # the first run compiles or loads the kernel
+        state = np.zeros(oscillator.STATE_Z + 2 * nz)
+        y, yd, z = np.empty(n), np.empty(n), np.empty((n, nz))
+        start = time.perf_counter()
+        _, iterations = osc._newmark_run(u_fine, n - 1, h, osc.mass, osc.damping, osc.stiffness, kinds, p_off,
+                                         params, z_off, state, True, y, yd, z, oscillator._NEWTON_RTOL,
+                                         oscillator._NEWTON_MAX_ITER, oscillator._NO_TANGENTS,
+                                         oscillator._NO_PARAMS, oscillator._NO_TANGENTS)
+        times.append(time.perf_counter() - start)
+    return float(np.median(times[1:])) / (n - 1), iterations / (n - 1)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--label", required=True, help="name of this measurement (e.g. before, after)")
+    args = parser.parse_args(argv)
+    code = Path(sklearn_pnlss.__file__).resolve().parents[1]
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
+                            cwd=code).stdout.strip()
+    X, _ = multisine(gw.PERIOD, fs=gw.FS, f_band=(5.0, 150.0), rms=50.0, n_periods=1, n_realizations=1,
+                     random_state=0)
+    u_fine = upsample_fft(X[0, :, 0], RATE, periodic=True)
+    h = 1.0 / (RATE * gw.FS)
+    rows = {}
+    for name, element in ELEMENTS.items():
+        seconds, iterations = step_cost(element, u_fine, h)
+        rows[name] = dict(ns_per_step=round(1e9 * seconds, 1), newton_iterations_per_step=round(iterations, 3))
+        print(f"{name:<22} {1e9 * seconds:7.1f} ns per step, {iterations:.2f} Newton iterations", flush=True)
+    path = RESULTS / "integrator_step.json"
+    out = json.loads(path.read_text()) if path.exists() else {}
+    out[args.label] = dict(header(), commit=commit, rate=RATE, steps=u_fine.size - 1, rows=rows)
+    path.write_text(json.dumps(out, indent=1))
+    print(f"written {path} ({args.label})")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
