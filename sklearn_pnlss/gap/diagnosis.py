@@ -2,6 +2,7 @@
 unmodelled effect explains it, and by how much adding it shrinks the gap."""
 import time
 import warnings
+from dataclasses import replace
 from numbers import Integral, Real
 
 import numpy as np
@@ -552,8 +553,8 @@ class GapDiagnosis(BaseEstimator):
             decision = decide(self.fits_, pick(y_list), pick(y_nominal), [pick(y) for y in y_effects],
                               pick(y_black_box), noise, self.significance, self.offsets, self.combinations_,
                               [pick(y) for y in y_combinations])
-            decision.sensitive_signals = sensitive
-        decision.recalibrated = self._recalibrated(decision)
+            decision = replace(decision, sensitive_signals=sensitive)
+        decision = replace(decision, recalibrated=self._recalibrated(decision))
         u_train, y_train = self._train
         where = locate_gap(self.nominal, u_list, y_list, y_nominal, val.n_periods, fs=self.fs,
                            period=self.period_, noise=noise, significance=self.significance,

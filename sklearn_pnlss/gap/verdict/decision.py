@@ -95,9 +95,11 @@ class RankedEffect:
         return d
 
 
-@dataclass
+@dataclass(frozen=True)
 class Decision:
-    """The verdict and the numbers behind it (see the module docstring)."""
+    """The verdict and the numbers behind it (see the module docstring).
+    Frozen: what the report adds to it (the signals left out, the
+    recalibration read off the chosen fit) makes a new one."""
 
     best_effect: object
     significant: bool
