@@ -106,27 +106,27 @@ def test_noise_floor_is_the_simulated_noise(cubic_case):
 
 def test_where_the_gap_lies(cubic_case):
     _, report = cubic_case
-    freq = report.where["frequency"]
-    bands = freq["bands"]
+    freq = report.where.frequency
+    bands = freq.bands
     # a stiffness nonlinearity shows where the response is large: around the
     # 25 Hz resonance, far above the noise there
-    worst = max(bands, key=lambda b: b["gap_db"] - b["noise_db"])
-    assert worst["f_lo"] <= 25.2 <= worst["f_hi"]
-    assert worst["n_significant"] > 0.5 * worst["n_lines"]
-    fmap = report.where["state_plane"]
-    finite = np.isfinite(fmap["force"])
+    worst = max(bands, key=lambda b: b.gap_db - b.noise_db)
+    assert worst.f_lo <= 25.2 <= worst.f_hi
+    assert worst.n_significant > 0.5 * worst.n_lines
+    fmap = report.where.state_plane
+    finite = np.isfinite(fmap.force)
     assert finite.sum() > 20
     # the missing force k3 y^3 is odd in displacement: the map's mean force at
     # the largest displacements has the sign of y and about its size
-    y_mid = 0.5 * (fmap["displacement_edges"][1:] + fmap["displacement_edges"][:-1])
-    rows = np.isfinite(fmap["force"]).any(axis=1)
+    y_mid = 0.5 * (fmap.displacement_edges[1:] + fmap.displacement_edges[:-1])
+    rows = np.isfinite(fmap.force).any(axis=1)
     col = np.full(rows.size, np.nan)
-    col[rows] = np.nanmean(fmap["force"][rows], axis=1)
+    col[rows] = np.nanmean(fmap.force[rows], axis=1)
     ok = np.isfinite(col)
     slope = np.polyfit(y_mid[ok] ** 3, col[ok], 1)[0]
     assert slope == pytest.approx(1e8, rel=0.3)
-    sweep = report.where["time"]["sweeps"][0]["windows"]
-    assert sweep[0]["frequency"] == pytest.approx(15.0, abs=2.0)
+    sweep = report.where.time.sweeps[0].windows
+    assert sweep[0].frequency == pytest.approx(15.0, abs=2.0)
 
 
 def test_report_text_dict_and_plot(cubic_case):

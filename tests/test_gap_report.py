@@ -9,6 +9,7 @@ from sklearn_pnlss.gap.verdict.decision import decide, percent
 from gap_signals import stub_effect
 from sklearn_pnlss.gap.verdict.noise_floor import NoiseFloor
 from sklearn_pnlss.gap.report import GapReport
+from sklearn_pnlss.gap.results import Band
 
 S2 = 1e-12
 SIZE = 10_000
@@ -33,7 +34,7 @@ def _report(candidates, black_box=None, noise=NOISE, where=None):
     d = decide(fits, [np.zeros(SIZE)], [np.full(SIZE, 1e-4)], [sim(m) for m in candidates.values()], y_bb,
                noise, 1e-3)
     bb = None if black_box is False else SimpleNamespace(n_params_=58)
-    return GapReport(decision=d, where=where or {}, scales=None, noise=noise, black_box=bb, fits=fits)
+    return GapReport(decision=d, where=where, scales=None, noise=noise, black_box=bb, fits=fits)
 
 
 def test_a_diverged_black_box_says_diverged():
@@ -79,8 +80,9 @@ def test_the_noise_estimate_is_named():
 
 
 def test_the_band_table_says_its_figures_are_sums():
-    band = dict(f_lo=0.0, f_hi=37.5, gap_db=-20.6, noise_db=-82.3, n_lines=102, n_significant=102)
-    where = dict(frequency=dict(bands=[band], detection_lines=False, line_kinds={}))
+    band = Band(f_lo=0.0, f_hi=37.5, gap_db=-20.6, noise_db=-82.3, distortion_db=None, n_lines=102, n_significant=102)
+    where = SimpleNamespace(frequency=SimpleNamespace(bands=[band], detection_lines=False, line_kinds={}),
+                            time=SimpleNamespace(drift=None))
     lines = str(_report({"c": S2}, black_box=False, where=where)).splitlines()
     i = lines.index("where in frequency (validation, periodic signals):")
     assert lines[i + 1] == "  dB of the power summed over each band's lines (|X_k|^2 / N per line, one period)"

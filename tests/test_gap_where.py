@@ -52,25 +52,25 @@ def test_gap_on_excited_lines_is_found_in_its_band(noisy_multisines):
     bins = np.arange(70, 91)
     gap = _tones(bins, 2e-6, 2 * N)
     freq = _where([u[2]], [y[2] + gap], [y_nominal[2]], [2], noise=noise,
-                  train=(u[:2], y[:2], y_nominal[:2]))["frequency"]
+                  train=(u[:2], y[:2], y_nominal[:2])).frequency
     # A 5-150 Hz input: harmonics up to 450 Hz, capped at 0.4 fs = 300 Hz.
-    assert freq["bands"][-1]["f_hi"] == pytest.approx(300.0)
-    assert len(freq["bands"]) == 8
-    worst = max(freq["bands"], key=lambda b: b["gap_db"] - b["noise_db"])
-    assert (worst["f_lo"], worst["f_hi"]) == (37.5, 75.0)
-    assert worst["gap_db"] == pytest.approx(10 * np.log10(bins.size * 4e-12 * N / 4), abs=0.05)
-    assert worst["gap_db"] - worst["noise_db"] > 25
-    assert freq["significant"][bins].all()
-    assert freq["line_kind"][bins].tolist() == [1] * bins.size  # excited lines
+    assert freq.bands[-1].f_hi == pytest.approx(300.0)
+    assert len(freq.bands) == 8
+    worst = max(freq.bands, key=lambda b: b.gap_db - b.noise_db)
+    assert (worst.f_lo, worst.f_hi) == (37.5, 75.0)
+    assert worst.gap_db == pytest.approx(10 * np.log10(bins.size * 4e-12 * N / 4), abs=0.05)
+    assert worst.gap_db - worst.noise_db > 25
+    assert freq.significant[bins].all()
+    assert freq.line_kind[bins].tolist() == [1] * bins.size  # excited lines
     # Elsewhere the gap is the noise: within 2 dB of the floor in every band.
-    for band in freq["bands"]:
+    for band in freq.bands:
         if band is not worst:
-            assert abs(band["gap_db"] - band["noise_db"]) < 2.0, band
+            assert abs(band.gap_db - band.noise_db) < 2.0, band
     # The per-line test compares each line with a floor estimated from two
     # periods of two signals, so a few lines outside the tones pass it too
     # (measured: 7 of 491); the tones stand out nonetheless.
-    others = np.setdiff1d(np.arange(1, freq["significant"].size), bins)
-    assert freq["significant"][others].mean() < 0.05
+    others = np.setdiff1d(np.arange(1, freq.significant.size), bins)
+    assert freq.significant[others].mean() < 0.05
 
 
 def test_gap_on_even_lines_shows_as_even_distortion(noisy_multisines):
@@ -79,21 +79,21 @@ def test_gap_on_even_lines_shows_as_even_distortion(noisy_multisines):
     u, y, y_nominal, noise = noisy_multisines
     bins = np.arange(280, 301, 2)  # 205-220 Hz, even, not excited
     freq = _where([u[2]], [y[2] + _tones(bins, 2e-6, 2 * N)], [y_nominal[2]], [2], noise=noise,
-                  train=(u[:2], y[:2], y_nominal[:2]))["frequency"]
-    assert freq["detection_lines"]
-    kinds = freq["line_kinds"]
-    assert kinds["even_not_excited"]["n_significant"] >= bins.size
-    assert kinds["even_not_excited"]["gap_db"] - kinds["even_not_excited"]["noise_db"] > 20
+                  train=(u[:2], y[:2], y_nominal[:2])).frequency
+    assert freq.detection_lines
+    kinds = freq.line_kinds
+    assert kinds["even_not_excited"].n_significant >= bins.size
+    assert kinds["even_not_excited"].gap_db - kinds["even_not_excited"].noise_db > 20
     # the odd lines hold noise only
-    assert abs(kinds["odd_not_excited"]["gap_db"] - kinds["odd_not_excited"]["noise_db"]) < 2.0
-    assert (freq["line_kind"][bins] == 3).all()
+    assert abs(kinds["odd_not_excited"].gap_db - kinds["odd_not_excited"].noise_db) < 2.0
+    assert (freq.line_kind[bins] == 3).all()
 
 
 def test_no_frequency_analysis_without_noise_floor_or_periodic_signal(noisy_multisines):
     u, y, y_nominal, noise = noisy_multisines
-    assert _where([u[2]], [y[2]], [y_nominal[2]], [2], noise=None)["frequency"] is None
+    assert _where([u[2]], [y[2]], [y_nominal[2]], [2], noise=None).frequency is None
     assert _where([u[2]], [y[2]], [y_nominal[2]], [0], noise=noise,
-                  train=(u[:2], y[:2], y_nominal[:2]))["frequency"] is None
+                  train=(u[:2], y[:2], y_nominal[:2])).frequency is None
 
 
 @pytest.fixture(scope="module")
@@ -114,17 +114,17 @@ def test_relative_gap_against_input_level(three_levels):
     scale = np.sqrt(np.mean(y_nominal[1] ** 2))
     for law, expected_step in ((lambda s: 1e-3 * s, 0.0), (lambda s: 1e-5 * s**3 / scale**2, 40 * np.log10(2))):
         y = [s + law(s) for s in y_nominal]
-        amp = _where(u[2:], y[2:], y_nominal[2:], [2], train=(u[:2], y[:2], y_nominal[:2]))["amplitude"]
-        levels = amp["input_levels"]
-        assert [lv["set"] for lv in levels] == ["train", "train", "validation"]
-        assert [lv["input_rms"] for lv in levels] == pytest.approx([25.0, 50.0, 100.0])
-        assert amp["several_levels"]
-        db = np.array([lv["relative_gap_db"] for lv in levels])
+        amp = _where(u[2:], y[2:], y_nominal[2:], [2], train=(u[:2], y[:2], y_nominal[:2])).amplitude
+        levels = amp.input_levels
+        assert [lv.set for lv in levels] == ["train", "train", "validation"]
+        assert [lv.input_rms for lv in levels] == pytest.approx([25.0, 50.0, 100.0])
+        assert amp.several_levels
+        db = np.array([lv.relative_gap_db for lv in levels])
         np.testing.assert_allclose(np.diff(db), expected_step, atol=2e-3)
     # the gain error's level, exactly
     y = [1.001 * s for s in y_nominal]
-    amp = _where(u, y, y_nominal, [2, 2, 2])["amplitude"]
-    assert amp["input_levels"][0]["relative_gap_db"] == pytest.approx(20 * np.log10(1e-3 / 1.001), abs=1e-6)
+    amp = _where(u, y, y_nominal, [2, 2, 2]).amplitude
+    assert amp.input_levels[0].relative_gap_db == pytest.approx(20 * np.log10(1e-3 / 1.001), abs=1e-6)
 
 
 def test_displacement_driven_gap_rises_with_displacement_not_velocity(three_levels):
@@ -134,14 +134,14 @@ def test_displacement_driven_gap_rises_with_displacement_not_velocity(three_leve
     u, y_nominal = three_levels
     scale = np.sqrt(np.mean(y_nominal[2] ** 2))
     y = [s + 1e-3 * s**3 / scale**2 for s in y_nominal]
-    amp = _where(u[2:], y[2:], y_nominal[2:], [2])["amplitude"]
-    assert amp["displacement"]["noise_db"] is None  # no noise floor given
-    disp = np.array([b["gap_db"] for b in amp["displacement"]["bins"]])
-    vel = np.array([b["gap_db"] for b in amp["velocity"]["bins"]])
+    amp = _where(u[2:], y[2:], y_nominal[2:], [2]).amplitude
+    assert amp.displacement.noise_db is None  # no noise floor given
+    disp = np.array([b.gap_db for b in amp.displacement.bins])
+    vel = np.array([b.gap_db for b in amp.velocity.bins])
     assert np.all(np.diff(disp) > 0)
     assert disp[-1] - disp[0] > 50  # measured: 74 dB
     assert np.ptp(vel) < 15  # measured: 9 dB
-    edges = [b["hi"] for b in amp["displacement"]["bins"]]
+    edges = [b.hi for b in amp.displacement.bins]
     assert edges[-1] == pytest.approx(np.max(np.abs(y[2])))
 
 
@@ -154,18 +154,18 @@ def test_gap_in_a_time_window_of_a_sweep():
     y_nominal = simulate_signals(NOMINAL, SignalSet.from_signals([sweep], N, FS, 10))[0]
     offset = np.zeros(t.size)
     offset[1500:1800] = 1e-5
-    time = _where([sweep], [y_nominal + offset], [y_nominal], [0])["time"]
-    windows = time["sweeps"][0]["windows"]
+    time = _where([sweep], [y_nominal + offset], [y_nominal], [0]).time
+    windows = time.sweeps[0].windows
     assert len(windows) == 40
-    gap_db = np.array([w["gap_db"] for w in windows])
+    gap_db = np.array([w.gap_db for w in windows])
     hit = np.flatnonzero(gap_db > -1000)
     assert hit.tolist() == [20, 21, 22, 23]
     np.testing.assert_allclose(gap_db[hit], -100.0, atol=1e-9)
-    centres = np.array([w["t"] for w in windows])
+    centres = np.array([w.t for w in windows])
     np.testing.assert_allclose(centres, (np.arange(40) + 0.5) * 75 / FS)
-    freq = np.array([w["frequency"] for w in windows])
+    freq = np.array([w.frequency for w in windows])
     np.testing.assert_allclose(freq[1:-1], 15.0 + 8.0 * centres[1:-1], atol=0.2)
-    assert time["drift"] is None  # the training signals have two periods
+    assert time.drift is None  # the training signals have two periods
 
 
 def test_drift_from_period_to_period():
@@ -179,17 +179,17 @@ def test_drift_from_period_to_period():
     base = [np.tile(rng.standard_normal(N) * 1e-4, P) for _ in range(2)]
     d = 3e-6 * rng.standard_normal(N)
     shift = np.concatenate([p * d for p in range(P)])
-    drift = _where(u, [b + shift for b in base], base, [P, P], noise=noise)["time"]["drift"]
+    drift = _where(u, [b + shift for b in base], base, [P, P], noise=noise).time.drift
     expected = [10 * np.log10(p**2 * np.mean(d**2) / (2 * s2)) for p in range(1, P)]
-    np.testing.assert_allclose(drift["change_vs_noise_db"], expected, atol=1e-9)
-    assert drift["drifting"]
+    np.testing.assert_allclose(drift.change_vs_noise_db, expected, atol=1e-9)
+    assert drift.drifting
     ratios = np.array([p**2 * np.mean(d**2) / (2 * s2) for p in range(1, P)])
-    assert drift["slope_per_period"] == pytest.approx(np.polyfit(np.arange(1, P), ratios, 1)[0])
+    assert drift.slope_per_period == pytest.approx(np.polyfit(np.arange(1, P), ratios, 1)[0])
     # noise alone: the change between periods is 2 s^2, the ratio about 1
     still = [b + np.sqrt(s2) * rng.standard_normal(b.size) for b in base]
-    drift = _where(u, still, base, [P, P], noise=noise)["time"]["drift"]
-    np.testing.assert_allclose(drift["change_vs_noise_db"], 0.0, atol=0.3)
-    assert not drift["drifting"]
+    drift = _where(u, still, base, [P, P], noise=noise).time.drift
+    np.testing.assert_allclose(drift.change_vs_noise_db, 0.0, atol=0.3)
+    assert not drift.drifting
 
 
 def test_signal_derivative_is_exact_on_periodic_tones():
@@ -223,13 +223,13 @@ def test_missing_force_of_a_stiffness_error(noisy_multisines):
     assert y_disp.size == 3 * N  # periods averaged, one per signal
     slope = np.polyfit(y_disp, force, 1)[0]
     assert slope == pytest.approx(5e3, rel=0.01)
-    fmap = _where(u, y, y, [2, 2, 2])["state_plane"]
-    assert not fmap["stateful_nominal_left_out"]
-    centres = 0.5 * (fmap["displacement_edges"][1:] + fmap["displacement_edges"][:-1])
-    rows = np.isfinite(fmap["force"]).any(axis=1)
-    mean_force = np.nanmean(fmap["force"][rows], axis=1)
+    fmap = _where(u, y, y, [2, 2, 2]).state_plane
+    assert not fmap.stateful_nominal_left_out
+    centres = 0.5 * (fmap.displacement_edges[1:] + fmap.displacement_edges[:-1])
+    rows = np.isfinite(fmap.force).any(axis=1)
+    mean_force = np.nanmean(fmap.force[rows], axis=1)
     assert np.polyfit(centres[rows], mean_force, 1)[0] == pytest.approx(5e3, rel=0.05)
-    assert np.all(fmap["count"][np.isfinite(fmap["force"])] >= 20)
+    assert np.all(fmap.count[np.isfinite(fmap.force)] >= 20)
 
 
 def test_stateful_nominal_elements_are_flagged():
@@ -241,4 +241,4 @@ def test_stateful_nominal_elements_are_flagged():
     y = simulate_signals(nominal, SignalSet.from_signals(u, N, FS, 10))
     where = locate_gap(nominal, u, y, y, [1], fs=FS, period=N, noise=None, significance=1e-3,
                        u_train=u, y_train=y, y_train_nominal=y)
-    assert where["state_plane"]["stateful_nominal_left_out"]
+    assert where.state_plane.stateful_nominal_left_out

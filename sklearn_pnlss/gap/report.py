@@ -1,4 +1,6 @@
 """The diagnosis report: verdict, ranking, where the gap lies, figures."""
+from dataclasses import asdict
+
 import numpy as np
 
 from .verdict.decision import percent
@@ -68,9 +70,10 @@ class GapReport:
     black_box : dict or None
         The decoupled PNLSS yardstick: its validation gap and closure, and
         the reading of each branch (``branches``).
-    where : dict
+    where : GapLocation or None
         Frequency, amplitude, state-plane and time analyses (see
-        :func:`sklearn_pnlss.gap.where.locate_gap`).
+        :func:`sklearn_pnlss.gap.where.locate_gap` and
+        :mod:`sklearn_pnlss.gap.results`).
     main_effect : str or None
         The best candidate (or the one preferred within the noise), named
         also when it leaves part of the gap unexplained.
@@ -122,7 +125,7 @@ class GapReport:
             noise_source=self.noise_source, noise_detail=self.noise_detail,
             sensitive_signals=self.decision.sensitive_signals, unsettled_signals=self.unsettled_signals,
             recalibrated=self.decision.recalibrated,
-            ranking=[r.to_dict() for r in self.ranking], black_box=self.black_box, where=self.where,
+            ranking=[r.to_dict() for r in self.ranking], black_box=self.black_box, where=None if self.where is None else asdict(self.where),
         ))
 
     def __str__(self):
@@ -171,7 +174,7 @@ class GapReport:
         if best is not None:
             params = ", ".join(f"{k} = {v:.4g}" for k, v in best.params.items())
             lines.append(f"\n{best.name}: {params}")
-        freq = self.where.get("frequency")
+        freq = None if self.where is None else self.where.frequency
         if freq is not None:
             lines.append("\nwhere in frequency (validation, periodic signals):")
             # The band figures are sums over their lines, not per line: a
@@ -179,18 +182,18 @@ class GapReport:
             # nominal gap above (a mean square per sample).
             lines.append("  dB of the power summed over each band's lines (|X_k|^2 / N per line, one period)")
             lines.append(f"  {'band Hz':<16}{'gap dB':>9}{'noise dB':>10}{'significant lines':>19}")
-            for b in freq["bands"]:
-                lines.append(f"  {b['f_lo']:6.1f}-{b['f_hi']:<8.1f}{_number(b['gap_db'], 1, 9)}"
-                             f"{_number(b['noise_db'], 1, 10)}"
-                             f"{b['n_significant']:>10d} / {b['n_lines']}")
-            if freq["detection_lines"]:
-                for k, v in freq["line_kinds"].items():
-                    lines.append(f"  {k}: {v['n_significant']} of {v['n_lines']} lines significant")
-        drift = self.where.get("time", {}).get("drift")
+            for b in freq.bands:
+                lines.append(f"  {b.f_lo:6.1f}-{b.f_hi:<8.1f}{_number(b.gap_db, 1, 9)}"
+                             f"{_number(b.noise_db, 1, 10)}"
+                             f"{b.n_significant:>10d} / {b.n_lines}")
+            if freq.detection_lines:
+                for k, v in freq.line_kinds.items():
+                    lines.append(f"  {k}: {v.n_significant} of {v.n_lines} lines significant")
+        drift = None if self.where is None else self.where.time.drift
         if drift is not None:
             lines.append(f"\nperiod-to-period change of the training response: "
-                         f"{_number(drift['change_vs_noise_db'][-1], 1)} dB over noise"
-                         + (" (drifting)" if drift["drifting"] else ""))
+                         f"{_number(drift.change_vs_noise_db[-1], 1)} dB over noise"
+                         + (" (drifting)" if drift.drifting else ""))
         return "\n".join(lines)
 
     def recalibration_text(self):
@@ -252,41 +255,40 @@ class GapReport:
         ax.set_title("candidates")
 
     def _plot_frequency(self, ax):
-        freq = self.where.get("frequency")
+        freq = self.where.frequency
         ax.set_title("gap spectrum")
         if freq is None:
             ax.text(0.5, 0.5, "no periodic validation signal", ha="center", transform=ax.transAxes)
             return
-        f = freq["frequency"]
-        ax.plot(f, 10 * np.log10(np.maximum(freq["gap_power"], 1e-300)), ".", ms=2, label="gap")
-        sig = freq["significant"]
-        ax.plot(f[sig], 10 * np.log10(freq["gap_power"][sig]), "o", mfc="none", ms=3, label="significant")
-        ax.plot(f, 10 * np.log10(np.maximum(freq["noise_power"], 1e-300)), "k", lw=0.8, label="noise")
-        if freq["distortion_power"] is not None:
-            d = freq["distortion_power"]
+        f = freq.frequency
+        ax.plot(f, 10 * np.log10(np.maximum(freq.gap_power, 1e-300)), ".", ms=2, label="gap")
+        sig = freq.significant
+        ax.plot(f[sig], 10 * np.log10(freq.gap_power[sig]), "o", mfc="none", ms=3, label="significant")
+        ax.plot(f, 10 * np.log10(np.maximum(freq.noise_power, 1e-300)), "k", lw=0.8, label="noise")
+        if freq.distortion_power is not None:
+            d = freq.distortion_power
             m = d > 0
             ax.plot(f[m], 10 * np.log10(d[m]), ".", ms=2, color="C3", label="NL distortion")
-        ax.set_xlim(0, freq["bands"][-1]["f_hi"])
+        ax.set_xlim(0, freq.bands[-1].f_hi)
         ax.set_xlabel("frequency (Hz)")
         ax.set_ylabel("dB")
         ax.legend(fontsize="small")
 
     def _plot_amplitude(self, ax):
-        amp = self.where["amplitude"]
-        for name in ("displacement", "velocity"):
-            rows = amp[name]["bins"]
-            x = np.arange(len(rows)) + 0.5
-            ax.plot(x, [r["gap_db"] for r in rows], "o-", label=name)
-        if amp["displacement"]["noise_db"] is not None:
-            ax.axhline(amp["displacement"]["noise_db"], color="k", ls="--", label="noise")
+        amp = self.where.amplitude
+        for name, level in (("displacement", amp.displacement), ("velocity", amp.velocity)):
+            x = np.arange(len(level.bins)) + 0.5
+            ax.plot(x, [r.gap_db for r in level.bins], "o-", label=name)
+        if amp.displacement.noise_db is not None:
+            ax.axhline(amp.displacement.noise_db, color="k", ls="--", label="noise")
         ax.set_xlabel("level bin (quantiles of |.|)")
         ax.set_ylabel("gap (dB)")
         ax.set_title("gap against amplitude")
         ax.legend(fontsize="small")
 
     def _plot_force_map(self, fig, ax):
-        m = self.where["state_plane"]
-        mesh = ax.pcolormesh(m["displacement_edges"], m["velocity_edges"], m["force"].T, cmap="RdBu_r",
+        m = self.where.state_plane
+        mesh = ax.pcolormesh(m.displacement_edges, m.velocity_edges, m.force.T, cmap="RdBu_r",
                              shading="flat")
         fig.colorbar(mesh, ax=ax, label="missing force (N)")
         ax.set_xlabel("displacement (m)")
@@ -294,22 +296,22 @@ class GapReport:
         ax.set_title("missing force map")
 
     def _plot_time(self, ax):
-        t = self.where["time"]
-        if t["sweeps"]:
-            w = t["sweeps"][0]["windows"]
-            ax.plot([r["frequency"] for r in w], [r["gap_db"] for r in w], "o-", label="gap")
-            ax.plot([r["frequency"] for r in w], [r["output_db"] for r in w], "-", color="0.6", label="output")
+        t = self.where.time
+        if t.sweeps:
+            w = t.sweeps[0].windows
+            ax.plot([r.frequency for r in w], [r.gap_db for r in w], "o-", label="gap")
+            ax.plot([r.frequency for r in w], [r.output_db for r in w], "-", color="0.6", label="output")
             ax.set_xlabel("instantaneous frequency of the sweep (Hz)")
             ax.set_title("gap along the sweep")
-        elif t["drift"] is not None:
-            ch = t["drift"]["change_vs_noise_db"]
+        elif t.drift is not None:
+            ch = t.drift.change_vs_noise_db
             ax.plot(np.arange(1, len(ch) + 1), ch, "o-")
             ax.set_xlabel("period")
             ax.set_title("change from the first period over noise")
         else:
             ax.text(0.5, 0.5, "no sweep or multi-period signal", ha="center", transform=ax.transAxes)
         ax.set_ylabel("dB")
-        if t["sweeps"]:
+        if t.sweeps:
             ax.legend(fontsize="small")
 
     def _plot_branches(self, ax):

@@ -12,6 +12,8 @@ from scipy.signal import hilbert
 from ..frequency.bla import excited_lines, periodic_bla
 from ..utils.validation import is_periodic
 from .readings import content_limit, missing_force, periods_of, signal_derivative
+from .results import (AmplitudeGap, Band, Drift, ForceMap, FrequencyGap, GapLocation, InputLevel, LevelBin, LevelGap,
+                      LineKindGap, MotionSamples, SweepGap, SweepWindow, TimeGap)
 
 __all__ = ["locate_gap"]
 
@@ -52,22 +54,19 @@ def _frequency_analysis(u_list, y_list, y_nominal, n_periods, period, fs, noise,
     bands = []
     for lo, hi in zip(edges[:-1], edges[1:]):
         sel = (f > lo) & (f <= hi)
-        entry = dict(f_lo=float(lo), f_hi=float(hi),
-                     gap_db=_db(gap_power[sel].sum()), noise_db=_db(noise_power[sel].sum()),
-                     distortion_db=None if distortion is None else _db(distortion[sel].sum()),
-                     n_lines=int(sel.sum()), n_significant=int(significant[sel].sum()))
-        bands.append(entry)
+        bands.append(Band(float(lo), float(hi), _db(gap_power[sel].sum()), _db(noise_power[sel].sum()),
+                          None if distortion is None else _db(distortion[sel].sum()), int(sel.sum()),
+                          int(significant[sel].sum())))
     by_kind = {}
     names = {1: "excited", 2: "odd_not_excited", 3: "even_not_excited"}
     for k, name in names.items():
         sel = kind == k
         if sel.any():
-            by_kind[name] = dict(n_lines=int(sel.sum()), n_significant=int(significant[sel].sum()),
-                                 gap_db=_db(gap_power[sel].sum()), noise_db=_db(noise_power[sel].sum()))
+            by_kind[name] = LineKindGap(int(sel.sum()), int(significant[sel].sum()), _db(gap_power[sel].sum()),
+                                        _db(noise_power[sel].sum()))
     has_detection = (kind[: int(f_hi / fs * period)] > 1).sum() > 0.2 * lines.size
-    return dict(frequency=f, gap_power=gap_power, noise_power=noise_power, distortion_power=distortion,
-                line_kind=kind, significant=significant, bands=bands, line_kinds=by_kind,
-                detection_lines=bool(has_detection))
+    return FrequencyGap(f, gap_power, noise_power, distortion, kind, significant, bands, by_kind,
+                        bool(has_detection))
 
 
 def _distortion_level(u_list, y_list, period, n_bins):
@@ -98,27 +97,24 @@ def _amplitude_analysis(u_list, y_list, y_nominal, velocity, noise, train):
     ``train`` is ``(u, y, y_nominal)`` of the training signals."""
     e = np.concatenate([a - b for a, b in zip(y_list, y_nominal)])
     noise_db = _db(noise.variance) if noise is not None else None
-    out = {}
-    for name, x in (("displacement", np.concatenate(y_list)), ("velocity", np.concatenate(velocity))):
+    by_level = []
+    for x in (np.concatenate(y_list), np.concatenate(velocity)):
         edges = np.quantile(np.abs(x), np.linspace(0, 1, N_LEVELS + 1))
         idx = np.clip(np.searchsorted(edges, np.abs(x), side="right") - 1, 0, N_LEVELS - 1)
         rows = []
         for b in range(N_LEVELS):
             m = idx == b
-            rows.append(dict(lo=float(edges[b]), hi=float(edges[b + 1]),
-                             gap_db=_db(np.mean(e[m] ** 2)) if m.any() else None))
-        out[name] = dict(bins=rows, noise_db=noise_db)
+            rows.append(LevelBin(float(edges[b]), float(edges[b + 1]), _db(np.mean(e[m] ** 2)) if m.any() else None))
+        by_level.append(LevelGap(rows, noise_db))
     # Input levels: the relative gap per distinct input rms, training and
     # validation together (a gap growing with level is nonlinear).
     levels = []
     for tag, (us, ys, ns) in (("train", train), ("validation", (u_list, y_list, y_nominal))):
         for u, y, yn in zip(us, ys, ns):
-            levels.append(dict(set=tag, input_rms=float(np.sqrt(np.mean(u**2))),
-                               relative_gap_db=_db(np.mean((y - yn) ** 2) / np.mean(y**2))))
-    out["input_levels"] = levels
-    rms = np.array([lv["input_rms"] for lv in levels])
-    out["several_levels"] = bool(rms.max() > 1.2 * rms.min())
-    return out
+            levels.append(InputLevel(tag, float(np.sqrt(np.mean(u**2))),
+                                     _db(np.mean((y - yn) ** 2) / np.mean(y**2))))
+    rms = np.array([lv.input_rms for lv in levels])
+    return AmplitudeGap(*by_level, levels, bool(rms.max() > 1.2 * rms.min()))
 
 
 def _force_map(nominal, u_list, y_list, n_periods, period, fs, f_max):
@@ -134,10 +130,8 @@ def _force_map(nominal, u_list, y_list, n_periods, period, fs, f_max):
     np.add.at(total, (iy, iv), f)
     np.add.at(count, (iy, iv), 1)
     force = np.where(count >= MIN_PER_CELL, total / np.maximum(count, 1), np.nan)
-    return dict(displacement_edges=y_edges, velocity_edges=v_edges, force=force, count=count,
-                missing_force_rms=float(np.sqrt(np.mean(f**2))),
-                stateful_nominal_left_out=bool(any(e.n_states for e in nominal.forces)),
-                samples=dict(displacement=y, velocity=v, force=f))
+    return ForceMap(y_edges, v_edges, force, count, float(np.sqrt(np.mean(f**2))),
+                    bool(any(e.n_states for e in nominal.forces)), MotionSamples(y, v, f))
 
 
 def _time_analysis(u_list, y_list, y_nominal, n_periods, period, fs, noise, y_train):
@@ -152,10 +146,9 @@ def _time_analysis(u_list, y_list, y_nominal, n_periods, period, fs, noise, y_tr
         edges = np.linspace(0, u.size, N_WINDOWS + 1).astype(int)
         rows = []
         for a, b in zip(edges[:-1], edges[1:]):
-            rows.append(dict(t=float((a + b) / 2 / fs), frequency=float(np.median(inst_f[a:b])),
-                             gap_db=_db(np.mean((y[a:b] - yn[a:b]) ** 2)),
-                             output_db=_db(np.mean(y[a:b] ** 2))))
-        sweeps.append(dict(signal=i, windows=rows))
+            rows.append(SweepWindow(float((a + b) / 2 / fs), float(np.median(inst_f[a:b])),
+                                    _db(np.mean((y[a:b] - yn[a:b]) ** 2)), _db(np.mean(y[a:b] ** 2))))
+        sweeps.append(SweepGap(i, rows))
     # Drift: how much the measured response changes from the first period,
     # against what noise alone gives (2 sigma^2 per sample).
     drift = None
@@ -169,9 +162,8 @@ def _time_analysis(u_list, y_list, y_nominal, n_periods, period, fs, noise, y_tr
         mean_change = np.mean([c[:width] for c in changes], axis=0)
         ratio = mean_change / (2 * noise.variance)
         slope = np.polyfit(np.arange(1, width + 1), ratio, 1)[0] if width > 1 else 0.0
-        drift = dict(change_vs_noise_db=[_db(r) for r in ratio], slope_per_period=float(slope),
-                     drifting=bool(ratio[-1] > 2.0))
-    return dict(sweeps=sweeps, drift=drift)
+        drift = Drift([_db(r) for r in ratio], float(slope), bool(ratio[-1] > 2.0))
+    return TimeGap(sweeps, drift)
 
 
 def locate_gap(nominal, u_list, y_list, y_nominal, n_periods, *, fs, period, noise, significance,
@@ -213,15 +205,16 @@ def locate_gap(nominal, u_list, y_list, y_nominal, n_periods, *, fs, period, noi
 
     Returns
     -------
-    where : dict
+    where : GapLocation
         ``frequency`` (bands, line kinds, per-line significance; None
         without periodic validation signals or noise floor), ``amplitude``
         (gap per displacement / velocity level, per input level),
-        ``state_plane`` (missing-force map) and ``time`` (sweeps, drift).
+        ``state_plane`` (missing-force map) and ``time`` (sweeps, drift);
+        see :mod:`sklearn_pnlss.gap.results`.
     """
     f_max = content_limit(u_list, fs)
     velocity = [signal_derivative(y, fs, P, period, 1, f_max) for y, P in zip(y_list, n_periods)]
-    return dict(
+    return GapLocation(
         frequency=_frequency_analysis(u_list, y_list, y_nominal, n_periods, period, fs, noise, significance,
                                       u_train, y_train),
         amplitude=_amplitude_analysis(u_list, y_list, y_nominal, velocity, noise,
