@@ -145,7 +145,8 @@ def draw_case(seed):
     elif name == "quadratic_stiffness":
         forces = (_scaled(QuadraticStiffness, 0.01 * k / y_rms, nominal, train, y_nominal, target),)
     elif name == "odd_quadratic_spring":
-        forces = (_scaled(lambda p: CustomForce(_odd_quadratic, [p]), 0.01 * k / y_rms, nominal, train, y_nominal, target),)
+        forces = (_scaled(lambda p: CustomForce(_odd_quadratic, [p]), 0.01 * k / y_rms, nominal, train, y_nominal,
+                          target),)
     elif name == "coulomb_friction":
         smooth = rng.uniform(0.005, 0.03) * v_rms
         forces = (_scaled(lambda p: CoulombFriction(p, smooth), 0.01 * c * v_rms, nominal, train, y_nominal, target),)

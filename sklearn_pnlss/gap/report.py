@@ -125,7 +125,8 @@ class GapReport:
             noise_source=self.noise_source, noise_detail=self.noise_detail,
             sensitive_signals=self.decision.sensitive_signals, unsettled_signals=self.unsettled_signals,
             recalibrated=self.decision.recalibrated,
-            ranking=[r.to_dict() for r in self.ranking], black_box=self.black_box, where=None if self.where is None else asdict(self.where),
+            ranking=[r.to_dict() for r in self.ranking], black_box=self.black_box,
+            where=None if self.where is None else asdict(self.where),
         ))
 
     def __str__(self):

@@ -328,9 +328,8 @@ def hidden_delay(run):
     refitted with it at the fitting rate, from its own fit and from its
     clues aligned at that delay (with half the iterations: most of them
     start close), and those in contention are refined as after the first
-    fits (:func:`refine_contenders`; refining all of them was half of the
-    stage's time, on the stiff backlash of family d 48 of a diagnosis'
-    87 s).  Skipped
+    fits (:func:`refine_contenders`; refining every one cost family d's
+    stiff backlash 18 s of its 148 s of CPU).  Skipped
     when the best candidate already sits within ``hidden_delay_db`` of the
     noise floor: no delay could gain that.
     """
@@ -439,12 +438,14 @@ def added_effects(run):
     pairs are formed: each of the ``forward_bases`` best refined candidates
     with every other physical effect, started from both fits side by side;
     the ``screened_pairs`` whose start fits the training data best are
-    fitted (at the fitting rate, half the iteration budget).  The best candidate alone can be the
-    wrong one, a flexible effect standing in for two others (a hysteresis
+    fitted (at the fitting rate, half the iteration budget).  The best
+    candidate alone can be the wrong one, a flexible effect standing in for
+    two others (a hysteresis
     closing 56 % of a cubic spring with quadratic damping, where the cubic
     spring alone closes 26 %), so the pairs do not all start from it.  The
     best pair that adds to the best single fit (:meth:`Fitting.adds_to`) is
-    refined (and carried on as :func:`polish_leader` does), and a third effect is looked for the same way from it, at most
+    refined (and carried on as :func:`polish_leader` does), and a third
+    effect is looked for the same way from it, at most
     ``max_added_effects`` in all.  The combinations are kept in
     ``run.combinations``; whether each pays is decided on validation (see
     :func:`~sklearn_pnlss.gap.verdict.decision.decide`).  Needs a noise
