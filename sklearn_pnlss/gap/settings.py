@@ -104,11 +104,6 @@ class GapSettings:
     #: hysteresis for a cubic spring with quadratic damping: 56 % closed,
     #: the cubic spring alone 26 %).
     forward_bases: int = 3
-    #: Of those pairs, the ones whose best start (the two single fits side
-    #: by side) fits the training data best are fitted; the others are
-    #: screened out by that one simulation (fitting every pair was most of
-    #: a two-effect diagnosis' time).
-    screened_pairs: int = 4
 
     # -- the verdict -------------------------------------------------------------------
     #: A gap smaller than this above the noise floor is not worth a diagnosis, dB.

@@ -31,7 +31,7 @@ from scipy.stats import chi2
 from .candidates.clues import read_clues
 from .candidates.effects import InputDelay, delay_signal
 from .fitting.black_box import fit_black_box
-from .fitting.calibrate import at_rate, fit_effect, parameter_information, refine_fit, start_mse
+from .fitting.calibrate import at_rate, fit_effect, parameter_information, refine_fit
 from .results import ChannelDelay
 from .settings import SETTINGS
 from ..utils.threads import one_blas_thread
@@ -435,12 +435,10 @@ def added_effects(run):
     Real structures seldom miss exactly one effect.  When the refined
     candidate with the lowest training error closes less than
     ``explained_closure`` of the nominal's training excess over the noise,
-    pairs are formed: each of the ``forward_bases`` best refined candidates
-    with every other physical effect, started from both fits side by side;
-    the ``screened_pairs`` whose start fits the training data best are
-    fitted (at the fitting rate, half the iteration budget).  The best
-    candidate alone can be the wrong one, a flexible effect standing in for
-    two others (a hysteresis
+    pairs are fitted: each of the ``forward_bases`` best refined candidates
+    with every other physical effect (at the fitting rate, half the
+    iteration budget, from both fits).  The best candidate alone can be the
+    wrong one, a flexible effect standing in for two others (a hysteresis
     closing 56 % of a cubic spring with quadratic damping, where the cubic
     spring alone closes 26 %), so the pairs do not all start from it.  The
     best pair that adds to the best single fit (:meth:`Fitting.adds_to`) is
@@ -464,7 +462,7 @@ def added_effects(run):
         left_db = 10 * np.log10(max(leader.train_mse / d.noise_.variance, 1.0))
         if nominal_excess_db <= 0 or 1 - left_db / nominal_excess_db >= SETTINGS.explained_closure:
             return
-        pairs, raws, planned = {}, {}, set()
+        tasks, raws, planned = {}, {}, set()
         for raw_base, base in bases:
             for other in physical.values():
                 together = frozenset([*raw_base.parts, other.name])
@@ -472,13 +470,13 @@ def added_effects(run):
                     continue  # in the base already, or this set of effects is planned from another base
                 planned.add(together)
                 raw = raw_base.plus(other)
-                pairs[raw.name] = run.composed(raw).variant(starts=_pair_starts(raw_base, base, other,
-                                                                                done[other.name]), data_starts=[])
+                pair = run.composed(raw).variant(starts=_pair_starts(raw_base, base, other, done[other.name]),
+                                                 data_starts=[])
+                tasks[raw.name] = run.fit_task(pair, max_nfev=max(3, d.max_nfev // 2), refine=False)
                 raws[raw.name] = raw
-        if not pairs:
+        if not tasks:
             return
-        fitted = run.run({name: run.fit_task(pairs[name], max_nfev=max(3, d.max_nfev // 2), refine=False)
-                          for name in _screened(run, pairs)})
+        fitted = run.run(tasks)
         best = min(fitted, key=lambda name: fitted[name].coarse_mse)
         if not run.adds_to(fitted[best], leader):  # both at the fitting rate (coarse_mse)
             return
@@ -488,20 +486,6 @@ def added_effects(run):
                 f"(the best alone {10 * np.log10(leader.train_mse):.2f} dB)")
         run.combinations.append(refined_best)
         leader, bases = refined_best, [(raws[best], refined_best)]
-
-
-def _screened(run, pairs):
-    """The ``SETTINGS.screened_pairs`` names of ``pairs`` (name -> effect)
-    whose best start fits the training data best at the fitting rate (one
-    simulation per start, in parallel)."""
-    d = run.diagnosis
-    if len(pairs) <= SETTINGS.screened_pairs:
-        return list(pairs)
-    with one_blas_thread():
-        mse = Parallel(n_jobs=d.n_jobs, prefer="threads")(
-            delayed(start_mse)(pair, d.nominal, d.scales_, run.coarse, run.y_list, d.offsets)
-            for pair in pairs.values())
-    return [name for _, name in sorted(zip(mse, pairs))[:SETTINGS.screened_pairs]]
 
 
 def _pair_starts(raw_base, base, other, other_fit):

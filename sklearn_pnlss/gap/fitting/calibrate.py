@@ -17,8 +17,8 @@ from .simulate import FIT_MAX_PERIODS, simulate_sensitivities, simulate_signals
 from ..readings import misfit
 from ..settings import SETTINGS
 
-__all__ = ["EffectFit", "meaningful_ftol", "fit_effect", "refine_fit", "at_rate", "start_mse",
-           "parameter_information", "parameter_covariance"]
+__all__ = ["EffectFit", "meaningful_ftol", "fit_effect", "refine_fit", "at_rate", "parameter_information",
+           "parameter_covariance"]
 
 # Residual given to a trial point that diverges or is not physical, relative
 # to the displacement scale: far above any real misfit.
@@ -374,15 +374,6 @@ def _defect_corrected(obj, fine_signals, theta, lower, upper, max_nfev, ftol):
         if start_cost - cost <= ftol * start_cost:
             break
     return obj, theta, n_used, solved
-
-
-def start_mse(effect, nominal, scales, signals, y_meas, offsets=False):
-    """Training mean square error, m^2, of the best of ``effect``'s listed
-    starts (one simulation each, no fit): a screen of candidates too many
-    to fit."""
-    obj = _Objective(effect, nominal, scales, signals, y_meas, offsets)
-    lower, upper = effect.bounds
-    return min(float(np.mean(obj(np.clip(s, lower, upper)) ** 2)) for s in effect.starts) * scales.displacement**2
 
 
 def _start_costs(obj, starts, n_listed):
