@@ -253,6 +253,11 @@ def _results(name):
     return json.loads((RESULTS / f"{name}.json").read_text())
 
 
+def _step(label, element):
+    """Nanoseconds per integrator step of ``element`` (bench_integrator_step.py)."""
+    return _results("integrator_step")[label]["rows"][element]["ns_per_step"]
+
+
 def _bounded(model, extrapolation="hold"):
     return next(row for row in _results("bounded")["models"]
                 if row["model"] == model and row["extrapolation"] == extrapolation)
@@ -338,6 +343,20 @@ def _family(family):
     removed = [r for r in rows if r["expected"] == "unexplained"]
     return (sum(r["ok"] for r in effects), len(effects), bool(null) and all(r["ok"] for r in null), median,
             sum(r["ok"] for r in removed), len(removed))
+
+
+def _quick(family):
+    """A gap_withheld.py --quick family's results: right answers, cases,
+    median and largest seconds per diagnosis."""
+    results = _results("gap_withheld_quick" if family == "e" else f"gap_withheld_family_{family}_quick")
+    rows, summary = results["rows"], results["summary"]
+    return sum(r["ok"] for r in rows), len(rows), summary["median_seconds"], summary["max_seconds"]
+
+
+def _generated():
+    """gap_generated.py's summary and rows."""
+    results = _results("gap_generated")
+    return results["summary"], results["rows"]
 
 
 def _family_rows(family):
@@ -781,10 +800,19 @@ FIGURES = [
     Figure(GAP, "(136 s, 114 s and 142 s; 260 s and 346 s in families a and b before).",
            "gap_withheld.py --family a, b, e (backlash, seed 101; before: the rows on ff6a337 and 38bbb02)",
            lambda: [*[_case(f, "backlash", 101)["seconds"] for f in "abe"], 260, 346], slack=1.0),
-    Figure(GAP, "the cubic spring 114 -> 35 s, the hysteresis 84 -> 35 s, no effect 116 -> 30 s",
-           "bench_gap_time.py: gap_time.json (before, after)",
+    Figure(GAP, "the cubic spring 114 -> 35 -> 23 s, the hysteresis 84 -> 35 -> 24 s, no effect 116 -> 30 -> 21 s",
+           "bench_gap_time.py: gap_time.json (before, after, now)",
            lambda: [v for name in ("cubic_stiffness", "hysteresis", "null") for v in
-                    (_gap_time("before", name)["seconds"], _gap_time("after", name)["seconds"])], slack=1.0),
+                    (_gap_time("before", name)["seconds"], _gap_time("after", name)["seconds"],
+                     _gap_time("now", name)["seconds"])], slack=1.0),
+    Figure(GAP, "a linear step takes 31 ns instead of 64, a cubic spring's 59 instead of 107, a Bouc-Wen "
+                "step (three Newton iterations) 218 instead of 284",
+           "bench_integrator_step.py: integrator_step.json (after, before)",
+           lambda: [_step("after", "linear"), _step("before", "linear"), _step("after", "cubic_stiffness"),
+                    _step("before", "cubic_stiffness"), _step("after", "hysteresis"), _step("before", "hysteresis")],
+           slack=1.0),
+    Figure(GAP, "in a chain of about a hundred clock cycles: 31 ns", "bench_integrator_step.py (after, linear)",
+           lambda: [_step("after", "linear")], slack=1.0),
     Figure(R, "the main effect and the added one are both right in 12 of 12 cases",
            "gap_withheld.py --family t: results/gap_withheld_family_t.json",
            lambda: (lambda summary, rows: [
