@@ -102,7 +102,9 @@ class GapSettings:
     #: Best single candidates each paired with every other effect when the
     #: best leaves a gap: the best alone can stand in for two others (a
     #: hysteresis for a cubic spring with quadratic damping: 56 % closed,
-    #: the cubic spring alone 26 %).
+    #: the cubic spring alone 26 %).  Every pair is fitted: ranked by its
+    #: start (the two single fits side by side) the hysteresis' pairs came
+    #: first and the right one was lost (family t, both seeds).
     forward_bases: int = 3
 
     # -- the verdict -------------------------------------------------------------------
