@@ -786,12 +786,13 @@ FIGURES = [
                       for r in _results("gap_withheld_family_d")["rows"]
                       if r["true"] == "hysteresis" and r["seed"] == seed],
                     0.5e3 / 750, 1e3 / 750, 1.5e3 / 750], slack=0.01),
-    Figure(GAP, "Left out, the second seed's stiff backlash closes 99.998 % of the achievable in families a, b and e",
-           "gap_withheld.py --family a, b, e (backlash, seed 101)",
-           lambda: [min(100 * _case(f, "backlash", 101)["closure_vs_achievable"] for f in "abe")], slack=0.001),
-    Figure(GAP, "(136 s, 114 s and 142 s; 260 s and 346 s in families a and b before).",
+    Figure(GAP, "Left out, the second seed's stiff backlash closes 99.998 % of the achievable in families a and b "
+                "(136 s and 114 s; 260 s and 346 s before), and 97.4 % in family e rerun on the present code (22 s).",
            "gap_withheld.py --family a, b, e (backlash, seed 101; before: the rows on ff6a337 and 38bbb02)",
-           lambda: [*[_case(f, "backlash", 101)["seconds"] for f in "abe"], 260, 346], slack=1.0),
+           lambda: [min(100 * _case(f, "backlash", 101)["closure_vs_achievable"] for f in "ab"),
+                    *[_case(f, "backlash", 101)["seconds"] for f in "ab"], 260, 346,
+                    100 * _case("e", "backlash", 101)["closure_vs_achievable"], _case("e", "backlash", 101)["seconds"]],
+           slack=1.0),
     Figure(GAP, "the cubic spring 114 -> 35 -> 23 s, the hysteresis 84 -> 35 -> 24 s, no effect 116 -> 30 -> 21 s",
            "bench_gap_time.py: gap_time.json (before, after, now)",
            lambda: [v for name in ("cubic_stiffness", "hysteresis", "null") for v in
@@ -866,7 +867,8 @@ FIGURES = [
            lambda: [_setting("needle_reach_db"), _setting("jump_ratio")]),
     Figure(GAP, "On the clean family's first seed the crawl had stopped 0.15 % off in every parameter (-101.5 dB "
                 "against the floor's -102.7 dB, 225 s); the refit without its needle signal reaches the floor "
-                "(100.0 %, 147 s).", "gap_withheld.py --family e (backlash, seed 100; before: the row on 328f3cc)",
+                "(100.0 %, 28 s on the present code).",
+           "gap_withheld.py --family e (backlash, seed 100; before: the row on 328f3cc)",
            lambda: [0.15, -101.5, -102.7, 225, *(lambda r: [100 * r["closure_vs_achievable"], r["seconds"]])(
                _case("e", "backlash", 100))], slack=1.0),
     Figure(GAP, "a training signal whose misfit is 10 times the median signal's", "gap.settings: jump_ratio",
@@ -904,23 +906,26 @@ FIGURES = [
     Figure(GAP, "(stiffness +5 %; stiffness −5 % with damping +30 %)", "benchmarks/gap_withheld.py",
            lambda: [5 * _source_of("benchmarks/gap_withheld.py", '"stiffness": 1.05 * K'),
                     -5 * _source_of("benchmarks/gap_withheld.py", '"stiffness": 0.95 * K, "damping": 1.3 * C'), 30]),
-    Figure(GAP, "where it is found, the correct effect closes at least 99.8 % of the achievable closure (the quadratic "
-                "spring; the strong cubic spring 99.9 % or more; the stiff backlash of the first seed 100.0 %, at "
+    Figure(GAP, "where it is found, the correct effect closes at least 97.4 % of the achievable closure (the stiff "
+                "backlash of the second seed, above; the others 99.8 % or more; the strong cubic spring 99.9 % or more; "
+                "the stiff backlash of the first seed 100.0 %, at "
                 "-102.69 dB against the floor's -102.69 dB, its nominal parameters within 1e-5 of the truth, once its "
                 "needle signal is left out", WITHHELD,
            lambda: [100 * _results("gap_withheld")["summary"]["min_closure_vs_achievable"],
+                    100 * sorted(r["closure_vs_achievable"] for r in _results("gap_withheld")["rows"]
+                                 if r["closure_vs_achievable"] is not None)[1],
                     _lowest_closure_vs_achievable("cubic_stiffness", strength=2),
                     *(lambda r: [100 * r["closure_vs_achievable"], r["ranking"][0][1], r["noise_floor_db"],
                                  1e-5 if max(abs(v) for v in r["recalibrated"].values()) < 1e-5 else 1])(
                         _case("e", "backlash", 100))], slack=0.05),
     Figure(GAP, "on the second seed one training realisation is chaotic and left out, and the fit on the other three "
-                "closes 99.998 % of the achievable", WITHHELD,
-           lambda: [100 * _case("e", "backlash", 101)["closure_vs_achievable"]], slack=0.001),
+                "closes 97.4 % of the achievable, 99.998 % before the speed-ups of issue 37", WITHHELD,
+           lambda: [100 * _case("e", "backlash", 101)["closure_vs_achievable"], 99.998, 37], slack=0.001),
     Figure(GAP, "(a 3e4 N/m spring beyond a 2.5 mm clearance, at a 2.6 mm rms response,",
            "benchmarks/gap_withheld.py (its case, and the rms of its simulated training response)",
            lambda: [3e4 * _source_of("benchmarks/gap_withheld.py", "DeadZoneSpring(3e4, 2.5e-3)"), 2.5,
                     1e3 * _withheld_backlash_rms()]),
-    Figure(GAP, "88 s per diagnosis (median), 147 s at most (the stiff backlash), with", WITHHELD,
+    Figure(GAP, "20 s per diagnosis (median), 49 s at most (a removed hysteresis), with", WITHHELD,
            lambda: [_results("gap_withheld")["summary"]["median_seconds"],
                     _results("gap_withheld")["summary"]["max_seconds"]], slack=1.0),
 ]
