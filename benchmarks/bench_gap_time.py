@@ -87,9 +87,9 @@ class BlackBoxClock:
     """Seconds of the black box's fit (wrapped where the diagnosis calls it)."""
 
     def __enter__(self):
-        import sklearn_pnlss.gap.stages as diagnosis
+        import sklearn_pnlss.gap.stages as stages
 
-        self.module, self.original, self.seconds = diagnosis, diagnosis.fit_black_box, []
+        self.module, self.original, self.seconds = stages, stages.fit_black_box, []
 
         def timed(*args, **kwargs):
             start = time.perf_counter()
@@ -97,7 +97,7 @@ class BlackBoxClock:
             self.seconds.append(time.perf_counter() - start)
             return out
 
-        diagnosis.fit_black_box = timed
+        stages.fit_black_box = timed
         return self
 
     def __exit__(self, *exc):
