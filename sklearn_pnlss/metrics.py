@@ -133,22 +133,33 @@ def max_error(y_true, y_pred):
 
 
 class _SignalScorer:
-    """``sign * metric(y, estimator.predict(X))`` over pooled signals."""
+    """``sign * metric(y, estimator.predict(X))`` over pooled signals (with
+    ``init_window``: each signal started from the state its first outputs
+    show, and those samples left out)."""
 
-    def __init__(self, metric, sign, name, kwargs):
+    def __init__(self, metric, sign, name, kwargs, init_window=0):
         self.metric, self.sign, self.name, self.kwargs = metric, sign, name, kwargs
+        self.init_window = int(init_window)
 
     def __call__(self, estimator, X, y, sample_weight=None):
         if sample_weight is not None:
             raise ValueError("sample_weight is not supported by signal scorers; pass None.")
-        true, pred = _pooled(y, estimator.predict(X))
+        if self.init_window:
+            windows = [Y[: self.init_window] for Y in as_signal_list(y, name="y", min_samples=1)[0]]
+            pred = estimator.predict(X, y_init=windows)
+        else:
+            pred = estimator.predict(X)
+        true, pred = _pooled(y, pred, self.init_window)
         return self.sign * float(self.metric(true, pred, **self.kwargs))
 
     def __repr__(self):
-        return f"signal_scorer({self.name!r})" if self.name else f"make_signal_scorer({self.metric.__name__})"
+        window = f", init_window={self.init_window}" if self.init_window else ""
+        if self.name:
+            return f"signal_scorer({self.name!r}{window})"
+        return f"make_signal_scorer({self.metric.__name__}{window})"
 
 
-def make_signal_scorer(metric, *, greater_is_better=True, **kwargs):
+def make_signal_scorer(metric, *, greater_is_better=True, init_window=0, **kwargs):
     """A scorer for ``GridSearchCV`` / ``cross_val_score`` that applies a
     metric over whole signals.
 
@@ -165,6 +176,11 @@ def make_signal_scorer(metric, *, greater_is_better=True, **kwargs):
     greater_is_better : bool, default=True
         False for an error (the scorer then returns minus the metric, as
         scikit-learn's ``neg_*`` scorers do).
+    init_window : int, default=0
+        Samples at the start of each held-out signal whose measured outputs
+        set its initial state (``predict(X, y_init=...)``) and which the
+        score leaves out: the field's protocol for records that do not
+        start from rest (``load_benchmark(...).skip``).
     **kwargs
         Passed on to ``metric``.
 
@@ -182,7 +198,7 @@ def make_signal_scorer(metric, *, greater_is_better=True, **kwargs):
     >>> make_signal_scorer(mean_absolute_error, greater_is_better=False)(model, X, X)
     -0.5
     """
-    return _SignalScorer(metric, 1.0 if greater_is_better else -1.0, None, kwargs)
+    return _SignalScorer(metric, 1.0 if greater_is_better else -1.0, None, kwargs, init_window)
 
 
 def _scorers():
@@ -201,7 +217,7 @@ def _scorers():
     }
 
 
-def signal_scorer(name):
+def signal_scorer(name, *, init_window=0):
     """scikit-learn's scorer ``name``, applied over whole signals.
 
     For ``scoring=signal_scorer("r2")`` where scikit-learn habits would
@@ -217,6 +233,10 @@ def signal_scorer(name):
         "fit_percent" (MATLAB's ``compare``), "neg_nrmse" and "neg_rms_db"
         (minus the rms error in dB, as :func:`rms_db_scorer`). Higher is
         better for all.
+    init_window : int, default=0
+        As in :func:`make_signal_scorer`: held-out signals start from the
+        state their first ``init_window`` outputs show, left out of the
+        score.
 
     Returns
     -------
@@ -231,7 +251,7 @@ def signal_scorer(name):
     if name not in table:
         raise ValueError(f"Unknown signal scorer {name!r}; choose one of {sorted(table)}.")
     metric, sign = table[name]
-    return _SignalScorer(metric, sign, name, {})
+    return _SignalScorer(metric, sign, name, {}, init_window)
 
 
 def rms_db_scorer(estimator, X, y):

@@ -307,6 +307,16 @@ def _f16_row(estimator):
     return [row["n_nonlinear_params"], row["mean_nrmse"], row["fit_s"]]
 
 
+def _field(bench, model):
+    """A model's row of bench_field.py (test rms error in the field's unit,
+    fit seconds, settings)."""
+    return next(r for r in _results("field")["benchmarks"][bench]["rows"] if r["model"] == model)
+
+
+def _published(bench, label):
+    return _results("field")["benchmarks"][bench]["published"][label]
+
+
 def _init_row(seed):
     """A draw of bench_decoupled_init.py: multisine, sweep (dB) and seconds
     of init="cpd", then of init="random"."""
@@ -478,7 +488,49 @@ def _grid_best_within_60():
     return [best["n_branches"], best["degree"], 60 if best["n_nonlinear_params"] <= 60 else -1]
 
 
+FIELD = "bench_field.py: field.json"
+TANKS_PNLSS = ("cascaded_tanks", "PNLSS")
+FIELD_FIGURES = [
+    Figure(R, "| WH2009 | `BLAEstimator(6)` | 71.75 mV | 0.2 s | |", FIELD,
+           lambda: [_field("wh2009", "BLA")["settings"]["n_states"], _field("wh2009", "BLA")["test_rmse"],
+                    _field("wh2009", "BLA")["fit_s"]]),
+    Figure(R, "| WH2009 | `PNLSSRegressor(6, degrees=(2, 3))`, states and input, both equations, 300 iterations "
+              "| 0.469 mV | 780 s | PNLSS 0.42 mV, best 0.241 mV |", FIELD,
+           lambda: [6, *_field("wh2009", "PNLSS")["settings"]["degrees"],
+                    _field("wh2009", "PNLSS")["settings"]["max_iter"], _field("wh2009", "PNLSS")["test_rmse"],
+                    _field("wh2009", "PNLSS")["fit_s"], _published("wh2009", "PNLSS (Paduart et al. 2012)"),
+                    _published("wh2009", "DT SUBNET (best)")]),
+    Figure(R, "| cascaded tanks | `BLAEstimator(2, offsets=True)` | 0.702 V | 0.0 s | |", FIELD,
+           lambda: [2, _field("cascaded_tanks", "BLA")["test_rmse"], _field("cascaded_tanks", "BLA")["fit_s"]]),
+    Figure(R, "| cascaded tanks | `PNLSSRegressor(2, degrees=(2, 3), variables=\"states\", equations=\"state\")` after it "
+              "| 0.316 V | 0.6 s | PNLSS 0.45 V, best 0.191 V |", FIELD,
+           lambda: [2, *_field(*TANKS_PNLSS)["settings"]["degrees"], _field(*TANKS_PNLSS)["test_rmse"],
+                    _field(*TANKS_PNLSS)["fit_s"], _published("cascaded_tanks", "PNLSS (Relan et al. 2017)"),
+                    _published("cascaded_tanks", "grey box (Worden et al. 2018)")]),
+    Figure(R, "| EMPS | `BLAEstimator(2, offsets=True)` | 58.8 mm | 0.1 s | linear 5.53 mm, best 2.64 mm |", FIELD,
+           lambda: [2, _field("emps", "BLA")["test_rmse"], _field("emps", "BLA")["fit_s"],
+                    _published("emps", "linear"), _published("emps", "dynoNet")]),
+    Figure(R, "through the origin the BLA misses by 9.20 V", FIELD,
+           lambda: [_field("cascaded_tanks", "BLA through the origin")["test_rmse"]]),
+    Figure(PN, "300 iterations: 0.469 mV on the test record in 780 s on 2 cores, behind the published PNLSS "
+               "model's 0.42 mV and the best published 0.241 mV", FIELD,
+           lambda: [300, _field("wh2009", "PNLSS")["test_rmse"], _field("wh2009", "PNLSS")["fit_s"],
+                    _results("field")["environment"]["cpu_count"], 0.42, 0.241]),
+    Figure(PN, "Its cost still falls after 300 iterations (Levenberg-Marquardt's long tail on 833 parameters)",
+           FIELD, lambda: [_field("wh2009", "PNLSS")["settings"]["max_iter"], _field("wh2009", "PNLSS")["n_params"]]),
+    Figure(PN, "lands on 71.75 mV at the default segment length where the published BLA is about 56 mV", FIELD,
+           lambda: [_field("wh2009", "BLA")["test_rmse"], 56], slack=0.5),
+    Figure(PN, "0.316 V, ahead of the published PNLSS model (0.45 V), behind the grey box (0.191 V)", FIELD,
+           lambda: [_field(*TANKS_PNLSS)["test_rmse"], 0.45, 0.191]),
+    Figure(PN, "the 1024 training samples", "load_benchmark('cascaded_tanks'), tests/test_field_benchmarks.py",
+           lambda: [1024]),
+    Figure(PN, "58.8 mm against 5.53 mm for the published linear model", FIELD,
+           lambda: [_field("emps", "BLA")["test_rmse"], _published("emps", "linear")]),
+    Figure(PN, "(679.9 mm: the position drifts", FIELD, lambda: [_field("emps", "linear, simulation error")["test_rmse"]]),
+]
+
 FIGURES = [
+    *FIELD_FIGURES,
     # README
     Figure(R, "levels 2, 4 and 6, 10 states, 2 cores)", F16, lambda: [2, 4, 6, 10, _results("f16")["environment"]["cpu_count"]]),
     Figure(R, "| `BLAEstimator(10)` | 0 | 0.427 | 3.9 s |", F16, lambda: [10, *_f16_row("BLAEstimator(10)")]),

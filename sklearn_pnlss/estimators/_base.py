@@ -9,7 +9,8 @@ from sklearn.utils.validation import check_is_fitted
 from ..inspection import linear_statespace, lm_fit_figures, summarize
 from ..metrics import rms_error
 from ..utils.handover import attach_stage, training_signals
-from ..utils.validation import is_periodic, restore_layout, signal_layout, validate_signals
+from ..statespace.model_base import DivergenceError
+from ..utils.validation import as_signal_list, is_periodic, restore_layout, signal_layout, validate_signals
 
 __all__ = ["SignalRegressorBase"]
 
@@ -91,18 +92,29 @@ class SignalRegressorBase(RegressorMixin, BaseEstimator):
     def _signal_is_periodic(self, n_samples):
         return is_periodic(n_samples, self._period())
 
-    def predict(self, X):
+    def predict(self, X, y_init=None):
         """Simulate the model (output error, not one-step-ahead prediction).
 
         With ``period`` set, a signal whose length is a multiple of
         ``period`` is simulated in periodic steady state; any other signal
-        starts from rest.
+        starts from rest, or, with ``y_init``, from the state its first
+        measured outputs show.
 
         Parameters
         ----------
         X : array-like of shape (n_signals, n_samples, n_inputs), a list of
             2-D signals, or one 1-D/2-D signal
             Input signals.
+        y_init : signals in the layout of ``X``, or None, default=None
+            The measured outputs over the first samples of each signal (its
+            state-initialisation window: the field's benchmarks allow it and
+            leave it out of the score, ``skip=`` in
+            :mod:`sklearn_pnlss.metrics`). Each signal is then simulated from
+            the state whose simulation reproduces them best in least squares
+            (periodic signals too): a record cut from a longer run starts
+            where the system was, not from rest. The windows may be shorter
+            than the signals; a window of ``k`` samples pins at most ``k``
+            times ``n_outputs`` states.
 
         Returns
         -------
@@ -110,8 +122,42 @@ class SignalRegressorBase(RegressorMixin, BaseEstimator):
         """
         check_is_fitted(self)
         X_list, _, layout = validate_signals(self, X, reset=False, min_samples=1)
-        out = [self._predict_signal(U, self._signal_is_periodic(U.shape[0])) for U in X_list]
+        if y_init is None:
+            out = [self._predict_signal(U, self._signal_is_periodic(U.shape[0])) for U in X_list]
+        else:
+            out = [self._predict_from_window(U, Y_head) for U, Y_head in zip(X_list, self._windows(y_init, X_list))]
         return restore_layout(out, layout, squeeze_1d=getattr(self, "_y_was_1d", False))
+
+    def _windows(self, y_init, X_list):
+        """``y_init`` as one (k_i, n_outputs) window per signal of ``X_list``."""
+        windows, _ = as_signal_list(y_init, name="y_init", min_samples=1)
+        if len(windows) != len(X_list):
+            raise ValueError(
+                f"X holds {len(X_list)} signal(s) but y_init holds {len(windows)}; pass one window "
+                "of measured outputs per input signal."
+            )
+        for i, (U, Y_head) in enumerate(zip(X_list, windows)):
+            if Y_head.shape[1] != self.n_outputs_:
+                raise ValueError(
+                    f"y_init: signal {i} has {Y_head.shape[1]} channel(s) but the model has "
+                    f"{self.n_outputs_} output(s); pass the measured outputs of the first samples."
+                )
+            if Y_head.shape[0] > U.shape[0]:
+                raise ValueError(
+                    f"y_init: signal {i}'s window holds {Y_head.shape[0]} samples but X's signal "
+                    f"only {U.shape[0]}; pass the outputs of the first samples only (y[:, :skip])."
+                )
+        return windows
+
+    def _predict_from_window(self, U, Y_head):
+        try:
+            return self.model_.simulate_from_window(U, Y_head)
+        except DivergenceError as exc:
+            raise DivergenceError(
+                f"{type(self).__name__}.predict: {exc} from the state read off y_init; the input X "
+                "drives the model outside the range it was fitted on, or y_init is not the output "
+                "measured with X.", sample=exc.sample,
+            ) from None
 
     def score(self, X, y, sample_weight=None):
         """Minus the rms simulation error in dB (higher is better).

@@ -94,7 +94,8 @@ class StateSpaceRegressorBase(SignalRegressorBase):
         unit-rms inputs, outputs and states on the training signals (a
         ScaledModel without monomials): where the nonlinear fits start."""
         periods = [self.period_ if self._signal_is_periodic(U.shape[0]) else None for U in X_list]
-        return normalised_linear_start(linear.A_, linear.B_, linear.C_, linear.D_, X_list, y_list, periods)
+        return normalised_linear_start(linear.A_, linear.B_, linear.C_, linear.D_, X_list, y_list, periods,
+                                       linear.model_.input_offset, linear.model_.output_offset)
 
     def _handed_period(self, stage):
         """``period``, or, when it is None, the period of the Pipeline stage

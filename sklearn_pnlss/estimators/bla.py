@@ -1,4 +1,5 @@
 """BLAEstimator: best linear approximation and a linear state-space model."""
+import warnings
 from numbers import Integral, Real
 
 import numpy as np
@@ -34,6 +35,24 @@ def _weighted_misfit(model, G, z, var):
 def _to_db_power(x):
     with np.errstate(divide="ignore"):
         return 10 * np.log10(x)
+
+
+def _warn_operating_point(X_list, y_list):
+    """Warn when a channel's mean exceeds its standard deviation: the
+    signals vary around an operating point, which a model through the
+    origin cannot hold together with the gain of the variations."""
+    for name, signals in (("X", X_list), ("y", y_list)):
+        stacked = np.concatenate(signals)
+        mean, std = np.mean(stacked, axis=0), np.std(stacked, axis=0)
+        if np.any(np.abs(mean) > std):
+            k = int(np.argmax(np.abs(mean) - std))
+            warnings.warn(
+                f"{name} channel {k} has a mean of {mean[k]:.4g}, beyond its standard deviation "
+                f"{std[k]:.4g}: the signals vary around an operating point, which a model through "
+                "the origin cannot hold. Set offsets=True to model the deviations from it.",
+                UserWarning, stacklevel=4,
+            )
+            return
 
 
 class BLAEstimator(SignalRegressorBase):
@@ -91,11 +110,27 @@ class BLAEstimator(SignalRegressorBase):
         ``3 n_states``) when None.
     nperseg : int or None, default=None
         Segment length of the Welch estimate (``period=None`` only).
+    offsets : bool, default=False
+        Model the deviations of the signals from their training means: the
+        BLA is the linear map between deviations around an operating point
+        (a pump's mean voltage and the water level it holds, a sensor's
+        zero), and the model predicts ``output_offset_ + G (u -
+        input_offset_)``; its rest is that operating point. The nonlinear
+        estimators started from this model keep its offsets, and
+        :class:`PNLSSRegressor` adds a constant term to each nonlinear
+        equation (its even terms shift the means, which the offsets already
+        hold). False, as the PNLSS toolbox: the model passes through the
+        origin (zero-mean excitation such as multisines, where an even
+        nonlinearity's DC output is the polynomial's to produce); a warning
+        says when the training signals sit around an operating point
+        instead (a channel's mean beyond its standard deviation).
 
     Attributes
     ----------
     A_, B_, C_, D_ : ndarray
-        The linear model.
+        The linear model (of the deviations from the offsets).
+    input_offset_, output_offset_ : ndarray of shape (n_inputs,), (n_outputs,)
+        The operating point: the training means with ``offsets``, else zero.
     model_ : ScaledModel
         The same model as the nonlinear estimators' fitted model (a
         :class:`~sklearn_pnlss.ScaledModel` around a
@@ -155,6 +190,7 @@ class BLAEstimator(SignalRegressorBase):
         "feedthrough": ["boolean"],
         "n_block_rows": [Interval(Integral, 2, None, closed="left"), None],
         "nperseg": [Interval(Integral, 4, None, closed="left"), None],
+        "offsets": ["boolean"],
     }
 
     def __init__(
@@ -168,6 +204,7 @@ class BLAEstimator(SignalRegressorBase):
         feedthrough=True,
         n_block_rows=None,
         nperseg=None,
+        offsets=False,
     ):
         self.n_states = n_states
         self.period = period
@@ -177,6 +214,7 @@ class BLAEstimator(SignalRegressorBase):
         self.feedthrough = feedthrough
         self.n_block_rows = n_block_rows
         self.nperseg = nperseg
+        self.offsets = offsets
 
     @validates_parameters
     def fit(self, X, y):
@@ -197,6 +235,13 @@ class BLAEstimator(SignalRegressorBase):
         """
         X_list, y_list = self._validate_fit_data(X, y)
         period = check_period(self.period)
+        if self.offsets:
+            self.input_offset_ = np.mean(np.concatenate(X_list), axis=0)
+            self.output_offset_ = np.mean(np.concatenate(y_list), axis=0)
+        else:
+            self.input_offset_ = np.zeros(X_list[0].shape[1])
+            self.output_offset_ = np.zeros(y_list[0].shape[1])
+            _warn_operating_point(X_list, y_list)
         if period is None:
             self._fit_welch(X_list, y_list)
         else:
@@ -321,7 +366,7 @@ class BLAEstimator(SignalRegressorBase):
         B, C, D = B * in_scale[None, :], out_scale[:, None] * C, scale * D
 
         self.A_, self.B_, self.C_, self.D_ = A, B, C, D
-        self.model_ = linear_scaled_model(A, B, C, D)
+        self.model_ = linear_scaled_model(A, B, C, D, self.input_offset_, self.output_offset_)
         self.frf_model_ = frequency_response(A, B, C, D, z)
         fs = 1.0 if self.fs is None else float(self.fs)
         self.frequencies_ = self.lines_ * fs / self._n_per_period
@@ -362,7 +407,8 @@ class BLAEstimator(SignalRegressorBase):
 
     def _predict_signal(self, U, periodic):
         period = self.period if periodic else None
-        return simulate_linear_signal(self.A_, self.B_, self.C_, self.D_, U, periodic_with=period)
+        y = simulate_linear_signal(self.A_, self.B_, self.C_, self.D_, U - self.input_offset_, periodic_with=period)
+        return y + self.output_offset_
 
     def _summary_structure(self):
         source = (

@@ -42,6 +42,11 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         Model order.
     degrees : tuple of int, default=(2, 3)
         Total degrees of the monomials, e.g. ``(2, 3)`` or ``(3, 5, 7)``.
+        ``()``: no monomials, the linear model itself fitted on the
+        simulation error (an output-error refinement of the BLA, which
+        fits the FRF instead: the better linear simulator, and consistent
+        where the BLA's H1 estimate is biased, such as data measured in
+        closed loop).
     variables : {"states_inputs", "states"}, default="states_inputs"
         Variables of the monomials.
     equations : {"state", "output", "both"}, default="state"
@@ -51,11 +56,10 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         model starts from (a ``BLAEstimator(period=P)`` before it), if any,
         else no period (``period_`` holds the one used). Periodic training signals (length a multiple of
         ``period``) are steady state: the end of their last period is
-        prepended as a transient, so no sample is lost. Other signals are
-        simulated from rest: the measurement is taken to start from rest, as
-        a swept sine does; when it does not, ``n_transient`` samples are left
-        out of the cost (we do not estimate an initial state: the discarded
-        samples cost less than the extra parameters and their bias).
+        prepended as a transient, so no sample is lost. Other signals
+        start from the state their first samples show (see
+        ``n_transient``): a record cut from a longer run does not start from
+        rest, and one that does gets a state near zero.
     average_periods : bool, default=True
         Fit periodic signals through their period average (the toolbox's
         practice). The model's steady-state output repeats every period, so
@@ -119,9 +123,13 @@ class PNLSSRegressor(StateSpaceRegressorBase):
     tol : float, default=1e-8
         Stop when an iteration lowers the cost by less than this fraction.
     n_transient : int or "auto", default="auto"
-        Samples prepended (periodic signals) or left out of the cost (other
-        signals). "auto": the decay time of the linear start's slowest pole,
-        at most a period, for periodic signals; 0 for the others.
+        Samples prepended (periodic signals) or left out of the cost, the
+        others simulated from rest (other signals). "auto": the decay time
+        of the linear start's slowest pole, at most a period, for periodic
+        signals; the other signals start from the state whose simulation
+        best reproduces their outputs over that decay time (at most the
+        signal), read off again at every evaluation of the cost, and every
+        sample counts.
     linear_model : BLAEstimator or None, default=None
         Estimator of the linear start (cloned before fitting); None uses
         ``BLAEstimator(n_states, period=period)``. In a Pipeline after a
@@ -251,8 +259,12 @@ class PNLSSRegressor(StateSpaceRegressorBase):
             raise ValueError(f"degrees must all be >= 2 (the linear terms are in A, B, C, D); got {self.degrees}.")
         return degrees
 
-    def _exponents(self, n, m):
-        degrees = self._degrees()
+    def _exponents(self, n, m, constant=False):
+        # Around an operating point (a linear start with offsets) the even
+        # terms shift the mean of the state and the output, which the
+        # offsets, the training means, already hold: a constant term in each
+        # equation puts it back.
+        degrees = self._degrees() + ([0] if constant else [])
         active = np.ones(n + m, dtype=bool)
         if self.variables == "states":
             active[n:] = False
@@ -312,7 +324,8 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         start = self._normalised_linear(self.linear_model_, X_list, y_list)
         linear = start.normalised
         n, p = linear.A.shape[0], linear.C.shape[0]
-        exE, exF = self._exponents(n, linear.B.shape[1])
+        constant = bool(np.any(start.input_offset) or np.any(start.output_offset))
+        exE, exF = self._exponents(n, linear.B.shape[1], constant)
         return start.with_normalised(replace(
             linear, E=np.zeros((n, exE.shape[0])), F=np.zeros((p, exF.shape[0])), exE=exE, exF=exF,
         ))

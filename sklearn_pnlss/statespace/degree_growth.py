@@ -20,7 +20,7 @@ def degree_stages(degrees, grow):
 
     Parameters
     ----------
-    degrees : sorted list of int (all >= 2)
+    degrees : sorted list of int (all >= 2; empty: the linear model alone)
     grow : bool or "auto"
         False: one stage with all degrees. True: the lowest degree alone
         first, then one more per stage. "auto": the degrees up to 3
@@ -32,8 +32,10 @@ def degree_stages(degrees, grow):
     [(2, 3), (2, 3, 5), (2, 3, 5, 7)]
     >>> degree_stages([2, 3], True)
     [(2,), (2, 3)]
+    >>> degree_stages([], "auto")
+    [()]
     """
-    if grow is False:
+    if grow is False or not degrees:
         return [tuple(degrees)]
     # "auto" fits degrees up to 3 together: degree 2 alone, an even
     # nonlinearity, leads the fit of (2, 3) to a worse optimum.
@@ -44,14 +46,16 @@ def degree_stages(degrees, grow):
 def with_degrees(full, degrees, previous):
     """``full`` (a PNLSSModel, E = F = 0) restricted to the monomials of
     ``degrees``, with the linear part and coefficients of ``previous``, the
-    fit on ``degrees[:-1]`` (or None)."""
+    fit on ``degrees[:-1]`` (or None). A constant term (a model around an
+    operating point) belongs to every stage."""
     parts = {}
     for name, ex, coef in (("E", full.exE, full.E), ("F", full.exF, full.F)):
-        keep = np.isin(ex.sum(axis=1), degrees)
+        degree = ex.sum(axis=1)
+        keep = (degree == 0) | np.isin(degree, degrees)
         parts[name], parts["ex" + name] = np.zeros_like(coef[:, keep]), ex[keep]
         if previous is not None:
             # Both keep the full model's column order, so the held columns line up.
-            held = np.isin(ex[keep].sum(axis=1), degrees[:-1])
+            held = (degree[keep] == 0) | np.isin(degree[keep], degrees[:-1])
             parts[name][:, held] = getattr(previous, name)
     linear = previous if previous is not None else full
     return PNLSSModel(A=linear.A.copy(), B=linear.B.copy(), C=linear.C.copy(), D=linear.D.copy(), **parts)

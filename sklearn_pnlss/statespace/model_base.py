@@ -36,7 +36,10 @@ class DivergenceError(ValueError):
 @dataclass
 class Segment:
     """One training signal ready for simulation: ``U`` is simulated from rest
-    and the first ``n_skip`` samples (a transient) are left out of the cost.
+    and the first ``n_skip`` samples (a transient) are left out of the cost;
+    or, with ``init_window`` (and ``n_skip`` zero), from the state whose
+    simulation best reproduces the first ``init_window`` samples of ``Y``
+    (a record that does not start from rest), all samples in the cost.
 
     Optional weighting of the squared error (see
     :mod:`sklearn_pnlss.statespace.objective`): ``time_weight`` of the shape
@@ -50,6 +53,7 @@ class Segment:
     time_weight: np.ndarray | None = None
     freq_weight: np.ndarray | None = None
     period: int | None = None
+    init_window: int = 0
 
 
 class StateSpaceModel:
@@ -199,9 +203,20 @@ class StateSpaceModel:
         was never fitted for."""
         return self.range_excursion(U, period) > factor
 
+    def segment_start(self, seg):
+        """The state a segment's simulation starts from: rest, or the one
+        its first ``init_window`` outputs show. The Jacobian takes it as
+        given (its change with the parameters is left out: the state is
+        re-read at every evaluation of the cost, a step at a time)."""
+        if not seg.init_window:
+            return np.zeros(self.n_states)
+        from .initial_state import estimate_initial_state  # it simulates with this module's models
+
+        return estimate_initial_state(self, seg.U, seg.Y[: seg.init_window])
+
     def segment_error(self, seg):
         """Simulation error (T, p) on one segment, or None when it diverges."""
-        Y, _, n_ok, _ = self._run(np.ascontiguousarray(seg.U), np.zeros(self.n_states))
+        Y, _, n_ok, _ = self._run(np.ascontiguousarray(seg.U), self.segment_start(seg))
         if n_ok < seg.U.shape[0]:
             return None
         return Y[seg.n_skip :] - seg.Y
@@ -242,7 +257,7 @@ class StateSpaceModel:
         block_length = max(1, min(int(block_length), T))
         if out is None and buffer is None:
             buffer = np.empty((block_length, self.C.shape[0], self.n_params))
-        x = np.zeros(self.n_states)
+        x = self.segment_start(seg)
         Sx = np.zeros((self.n_states, self.n_state_params))
         # The transient before the first row, then the blocks of rows.
         self._sensitivity(U[: seg.n_skip], x, Sx, seg.n_skip, (out if out is not None else buffer)[:0])

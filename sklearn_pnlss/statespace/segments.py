@@ -6,7 +6,8 @@ no sample is lost, and its periods may be averaged first (the noise power
 drops by the number of periods; with a steady-state model the least-squares
 optimum is unchanged, since the model's output repeats every period). Any
 other signal is simulated from rest and its first ``n_skip`` samples may be
-left out of the cost.
+left out of the cost, or from the state its first ``init_window`` samples
+show (a record that does not start from rest).
 """
 import numpy as np
 
@@ -45,7 +46,7 @@ def average_periods(U, Y, period, weight=None):
 
 def make_segments(
     X_list, y_list, *, period, n_transient, n_skip=0, average=False,
-    time_weights=None, freq_weight=None,
+    time_weights=None, freq_weight=None, init_window=0,
 ):
     """Segments for :class:`~sklearn_pnlss.statespace.objective.SimulationError`.
 
@@ -57,6 +58,9 @@ def make_segments(
         Samples prepended to periodic signals.
     n_skip : int
         Samples left out of the cost at the start of the other signals.
+    init_window : int
+        Without ``n_skip``: samples at the start of the other signals whose
+        outputs set their initial state (at most the signal).
     average : bool
         Average periodic signals over their periods first.
     time_weights : list of ndarray or None
@@ -70,7 +74,8 @@ def make_segments(
         W = None if time_weights is None else np.broadcast_to(time_weights[i], Y.shape)
         if not is_periodic(U.shape[0], period):
             skip = min(n_skip, U.shape[0] - 1)
-            segs.append(Segment(U, Y[skip:], skip, time_weight=None if W is None else W[skip:]))
+            segs.append(Segment(U, Y[skip:], skip, time_weight=None if W is None else W[skip:],
+                                init_window=0 if skip else min(init_window, U.shape[0])))
             continue
         n_averaged = 1
         if average and U.shape[0] > period:
