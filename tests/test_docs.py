@@ -494,10 +494,11 @@ FIELD_FIGURES = [
     Figure(R, "| WH2009 | `BLAEstimator(6)` | 71.75 mV | 0.2 s | |", FIELD,
            lambda: [_field("wh2009", "BLA")["settings"]["n_states"], _field("wh2009", "BLA")["test_rmse"],
                     _field("wh2009", "BLA")["fit_s"]]),
-    Figure(R, "| WH2009 | `PNLSSRegressor(6, degrees=(2, 3))`, states and input, both equations, 300 iterations "
-              "| 0.469 mV | 780 s | PNLSS 0.42 mV, best 0.241 mV |", FIELD,
+    Figure(R, "| WH2009 | `PNLSSRegressor(6, degrees=(2, 3))`, states and input, both equations, 400 iterations, "
+              "`n_jobs=2` | 0.436 mV | 779 s | PNLSS 0.42 mV, best 0.241 mV |", FIELD,
            lambda: [6, *_field("wh2009", "PNLSS")["settings"]["degrees"],
-                    _field("wh2009", "PNLSS")["settings"]["max_iter"], _field("wh2009", "PNLSS")["test_rmse"],
+                    _field("wh2009", "PNLSS")["settings"]["max_iter"], _field("wh2009", "PNLSS")["settings"]["n_jobs"],
+                    _field("wh2009", "PNLSS")["test_rmse"],
                     _field("wh2009", "PNLSS")["fit_s"], _published("wh2009", "PNLSS (Paduart et al. 2012)"),
                     _published("wh2009", "DT SUBNET (best)")]),
     Figure(R, "| cascaded tanks | `BLAEstimator(2, offsets=True)` | 0.702 V | 0.0 s | |", FIELD,
@@ -512,12 +513,18 @@ FIELD_FIGURES = [
                     _published("emps", "linear"), _published("emps", "dynoNet")]),
     Figure(R, "through the origin the BLA misses by 9.20 V", FIELD,
            lambda: [_field("cascaded_tanks", "BLA through the origin")["test_rmse"]]),
-    Figure(PN, "300 iterations: 0.469 mV on the test record in 780 s on 2 cores, behind the published PNLSS "
-               "model's 0.42 mV and the best published 0.241 mV", FIELD,
-           lambda: [300, _field("wh2009", "PNLSS")["test_rmse"], _field("wh2009", "PNLSS")["fit_s"],
-                    _results("field")["environment"]["cpu_count"], 0.42, 0.241]),
-    Figure(PN, "Its cost still falls after 300 iterations (Levenberg-Marquardt's long tail on 833 parameters)",
-           FIELD, lambda: [_field("wh2009", "PNLSS")["settings"]["max_iter"], _field("wh2009", "PNLSS")["n_params"]]),
+    Figure(PN, "``PNLSSRegressor(6, degrees=(2, 3), n_jobs=2)``", FIELD,
+           lambda: [6, *_field("wh2009", "PNLSS")["settings"]["degrees"], _field("wh2009", "PNLSS")["settings"]["n_jobs"]]),
+    Figure(PN, "400 iterations (the record cut in two for the threads, each half started from the state its first "
+               "samples show): 0.436 mV on the test record in 779 s on 2 cores, 4 % behind the published PNLSS "
+               "model's 0.42 mV, well behind the best published 0.241 mV", FIELD,
+           lambda: [_field("wh2009", "PNLSS")["settings"]["max_iter"], _field("wh2009", "PNLSS")["test_rmse"],
+                    _field("wh2009", "PNLSS")["fit_s"], _results("field")["environment"]["cpu_count"],
+                    100 * (_field("wh2009", "PNLSS")["test_rmse"] / 0.42 - 1), 0.42, 0.241]),
+    Figure(PN, "Its cost still falls by 0.19 dB over the last 100 iterations (Levenberg-Marquardt's long tail on "
+               "833 parameters)", FIELD,
+           lambda: [_field("wh2009", "PNLSS")["cost_db_every_50"][-3] - _field("wh2009", "PNLSS")["cost_db_every_50"][-1],
+                    100, _field("wh2009", "PNLSS")["n_params"]]),
     Figure(PN, "lands on 71.75 mV at the default segment length where the published BLA is about 56 mV", FIELD,
            lambda: [_field("wh2009", "BLA")["test_rmse"], 56], slack=0.5),
     Figure(PN, "0.316 V, ahead of the published PNLSS model (0.45 V), behind the grey box (0.191 V)", FIELD,

@@ -138,7 +138,10 @@ class PNLSSRegressor(StateSpaceRegressorBase):
     n_jobs : int or None, default=None
         Threads over the training signals for the simulations and the
         Jacobian (the compiled kernels and the BLAS products release the GIL;
-        each thread runs BLAS single-threaded). Worth it with many signals:
+        each thread runs BLAS single-threaded). With fewer signals than
+        threads, each non-periodic signal is cut into consecutive pieces,
+        every one starting from the state its first samples show (see
+        ``n_transient``). Worth it with many signals:
         twenty Bouc-Wen realisations, degrees (3, 5, 7), two cores: 1.2 to
         1.5 times faster per iteration. None means 1, -1 all cores; leave it
         at None inside a parallel grid search.

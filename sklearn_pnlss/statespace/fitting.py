@@ -131,7 +131,7 @@ def simulation_objectives(start, X_list, y_list, settings, time_weights=None):
             Xn, yn, period=period, n_transient=n_tr if period else 0,
             n_skip=0 if settings.n_transient == "auto" else int(settings.n_transient),
             average=settings.average_periods, time_weights=time_weights, freq_weight=freq_weight,
-            init_window=window,
+            init_window=window, pieces=-(-settings.n_threads // len(Xn)),
         ), n_threads=settings.n_threads)
 
     # The noise-weighted cost, dominated by the quietest bins, has poor

@@ -46,7 +46,7 @@ def average_periods(U, Y, period, weight=None):
 
 def make_segments(
     X_list, y_list, *, period, n_transient, n_skip=0, average=False,
-    time_weights=None, freq_weight=None, init_window=0,
+    time_weights=None, freq_weight=None, init_window=0, pieces=1,
 ):
     """Segments for :class:`~sklearn_pnlss.statespace.objective.SimulationError`.
 
@@ -61,6 +61,11 @@ def make_segments(
     init_window : int
         Without ``n_skip``: samples at the start of the other signals whose
         outputs set their initial state (at most the signal).
+    pieces : int
+        With ``init_window``: each of the other signals cut into this many
+        consecutive segments (each at least four windows long), every one
+        starting from the state its own first samples show, so that
+        threads over the segments share a long record.
     average : bool
         Average periodic signals over their periods first.
     time_weights : list of ndarray or None
@@ -74,8 +79,12 @@ def make_segments(
         W = None if time_weights is None else np.broadcast_to(time_weights[i], Y.shape)
         if not is_periodic(U.shape[0], period):
             skip = min(n_skip, U.shape[0] - 1)
-            segs.append(Segment(U, Y[skip:], skip, time_weight=None if W is None else W[skip:],
-                                init_window=0 if skip else min(init_window, U.shape[0])))
+            window = 0 if skip else min(init_window, U.shape[0])
+            n_pieces = max(1, min(pieces, U.shape[0] // (4 * window))) if window else 1
+            cuts = np.linspace(0, U.shape[0], n_pieces + 1).astype(int)
+            for a, b in zip(cuts[:-1], cuts[1:]):
+                segs.append(Segment(U[a:b], Y[a + skip:b], skip,
+                                    time_weight=None if W is None else W[a + skip:b], init_window=window))
             continue
         n_averaged = 1
         if average and U.shape[0] > period:
