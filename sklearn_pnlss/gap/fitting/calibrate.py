@@ -94,9 +94,6 @@ class _Objective:
         # the steady states of the last point simulated: its Jacobian (the
         # trust region asks at the point it has just accepted) starts there
         self._steady = (None, None)
-        # the steady states at the last Jacobian's point, the trust
-        # region's centre: its trial points' searches start there
-        self._centre = None
 
     def __call__(self, theta):
         self.n_evaluations += 1
@@ -104,7 +101,7 @@ class _Objective:
         try:
             osc, transform, _ = self.effect.simulator(theta, self.nominal, self.scales)
             y_sim = simulate_signals(osc, self.signals, transform, max_periods=FIT_MAX_PERIODS,
-                                     max_abs=self.max_abs, steady_states=states, near=self._centre)
+                                     max_abs=self.max_abs, steady_states=states)
         except (ValueError, FloatingPointError, ZeroDivisionError):
             return np.full(self.size, _PENALTY)
         self._steady = (np.asarray(theta, float).tobytes(), states)
@@ -154,7 +151,6 @@ class _Objective:
                                         max_abs=self.max_abs, steady_states=states)
         except (ValueError, FloatingPointError, ZeroDivisionError):
             return None
-        self._centre = states
         self.n_evaluations += 1
         blocks = [d @ physical for d in dy]
         if self.offsets:

@@ -234,14 +234,11 @@ def measured_starts(y_list, velocity_list, n_periods, period):
             for y, v, P in zip(y_list, velocity_list, n_periods)]
 
 
-def _steady(osc, u_fine, fs_fine, max_periods=MAX_PERIODS, max_abs=None, start=None, near=None):
-    """The periodic steady state, searched from ``near`` (a whole integrator
-    state of this oscillator's layout) where given, else from ``start``
-    (displacement and velocity; internal states at zero), else from rest."""
+def _steady(osc, u_fine, fs_fine, max_periods=MAX_PERIODS, max_abs=None, start=None):
+    """The periodic steady state, searched from ``start`` (displacement and
+    velocity; internal states at zero), else from rest."""
     initial = None
-    if near is not None and near.shape == (STATE_Z + 2 * osc.n_internal_states,):
-        initial = near
-    elif start is not None:
+    if start is not None:
         initial = np.zeros(STATE_Z + 2 * osc.n_internal_states)
         initial[:2] = start  # internal states at zero; rates follow from the equation of motion
     return osc.simulate_fine(u_fine, fs=fs_fine, periodic=True, tol=STEADY_TOL, max_periods=max_periods,
@@ -249,7 +246,7 @@ def _steady(osc, u_fine, fs_fine, max_periods=MAX_PERIODS, max_abs=None, start=N
 
 
 def _fine_response(osc, u_fine, P, fs_fine, transform, max_periods=MAX_PERIODS, max_abs=None, start=None,
-                   record=False, near=None):
+                   record=False):
     """Displacement at the integration rate, whether it is periodic (its
     decimation circular), the steady state it repeats (the integrator's
     state at its period start; None for a signal from rest or a
@@ -263,7 +260,7 @@ def _fine_response(osc, u_fine, P, fs_fine, transform, max_periods=MAX_PERIODS, 
     if not periodic:
         return osc.simulate_fine(u_fine, fs=fs_fine, periodic=False, max_abs=max_abs).y, False, None, 1
     if not osc.time_varying:
-        steady = _steady(osc, u_fine, fs_fine, max_periods, max_abs, start, near)
+        steady = _steady(osc, u_fine, fs_fine, max_periods, max_abs, start)
         if record:
             # where the search ended, on: a response that never settles
             # (chaos) differs from period to period, as measured; one
@@ -295,7 +292,7 @@ def _each_signal(func, *columns):
 
 
 def simulate_signals(osc, signals, transform=None, *, noise_rms=0.0, random_state=None,
-                     max_periods=MAX_PERIODS, max_abs=None, record=False, steady_states=None, near=None):
+                     max_periods=MAX_PERIODS, max_abs=None, record=False, steady_states=None):
     """Simulate ``osc`` on every signal of a :class:`SignalSet`.
 
     Parameters
@@ -329,16 +326,6 @@ def simulate_signals(osc, signals, transform=None, *, noise_rms=0.0, random_stat
         When a list, filled with each signal's steady state (the
         integrator's state at its period start, None where there is none):
         :func:`simulate_sensitivities` at the same parameters starts there.
-    near : list, default=None
-        Per signal, a steady state at nearby parameters (as
-        ``steady_states`` fills it; None where unknown) to start the
-        search from instead of the measured start: a fit's trial point
-        starts from the orbit of the point it moves away from, internal
-        states included.  (Measured on the clean family's cubic and
-        hysteresis cases: no gain in time or simulations against the
-        measured start, whose structures settle within the two periods
-        every search takes; the long searches are trial points whose
-        hysteresis loop runs away, which no start settles.)
 
     Returns
     -------
@@ -355,9 +342,9 @@ def simulate_signals(osc, signals, transform=None, *, noise_rms=0.0, random_stat
             y_fine = decimate_fir(y_fine, signals.decimation, periodic=circular)
         return np.tile(y_fine, repeats) if repeats > 1 else y_fine
 
-    def one(u_fine, P, start, orbit):
+    def one(u_fine, P, start):
         y_fine, circular, steady, repeats = _fine_response(osc, u_fine, P, fs_fine, transform, max_periods,
-                                                           max_abs, start, record, orbit)
+                                                           max_abs, start, record)
         if noise_rms > 0:
             # noise differs from period to period and comes from one
             # generator in signal order: added to the whole record below
@@ -365,8 +352,7 @@ def simulate_signals(osc, signals, transform=None, *, noise_rms=0.0, random_stat
         return decimated(y_fine, circular, repeats), circular, steady
 
     out = []
-    for y, circular, steady in _each_signal(one, signals.u_fine, signals.n_periods, starts,
-                                            near or [None] * len(signals.u_fine)):
+    for y, circular, steady in _each_signal(one, signals.u_fine, signals.n_periods, starts):
         if steady_states is not None:
             steady_states.append(steady)
         if noise_rms > 0:
