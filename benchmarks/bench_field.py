@@ -102,12 +102,12 @@ def run(name, data_dir):
             rows.append({"model": label, "settings": settings, "error": str(exc)})
             print(f"{name:15s} {label:8s} failed: {exc}", flush=True)
             continue
+        final = model[-1] if hasattr(model, "steps") else model
         row = {"model": label, "settings": settings, "fit_s": fit_s, "unit": data.report_unit,
-               "n_params": getattr(model[-1] if hasattr(model, "steps") else model, "n_params_", None),
+               "n_params": getattr(final, "n_params_", None),
                "test_rmse": data.report_scale * rms_error(data.y_test, pred, skip=data.skip),
                "nrmse": nrmse(data.y_test, pred, skip=data.skip),
                "fit_percent": fit_percent(data.y_test, pred, skip=data.skip)}
-        final = model[-1] if hasattr(model, "steps") else model
         if hasattr(final, "cost_history_"):
             # whether Levenberg-Marquardt had levelled off: the cost (dB) every 50 iterations
             row["cost_db_every_50"] = [float(10 * np.log10(c)) for c in final.cost_history_[::50]]

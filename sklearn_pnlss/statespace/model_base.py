@@ -214,9 +214,11 @@ class StateSpaceModel:
 
         return estimate_initial_state(self, seg.U, seg.Y[: seg.init_window])
 
-    def segment_error(self, seg):
-        """Simulation error (T, p) on one segment, or None when it diverges."""
-        Y, _, n_ok, _ = self._run(np.ascontiguousarray(seg.U), self.segment_start(seg))
+    def segment_error(self, seg, start=None):
+        """Simulation error (T, p) on one segment, or None when it diverges;
+        ``start``: its :meth:`segment_start`, when already read."""
+        start = self.segment_start(seg) if start is None else start
+        Y, _, n_ok, _ = self._run(np.ascontiguousarray(seg.U), start)
         if n_ok < seg.U.shape[0]:
             return None
         return Y[seg.n_skip :] - seg.Y
@@ -235,7 +237,7 @@ class StateSpaceModel:
             pass
         return J
 
-    def jacobian_blocks(self, seg, block_length, out=None, buffer=None):
+    def jacobian_blocks(self, seg, block_length, out=None, buffer=None, start=None):
         """The rows of :meth:`segment_jacobian` ``block_length`` samples at a
         time: yields ``(start, J_block)``, ``J_block`` of shape (L, p,
         n_params) holding rows ``start:start + L`` of the segment's error.
@@ -250,14 +252,16 @@ class StateSpaceModel:
         megabytes and a Jacobian of gigabytes, whose first touch alone cost
         more than its arithmetic (F-16, 2,893 parameters: 1.5 s of 2.3 s per
         8,192-sample segment); a ``buffer`` reused from segment to segment
-        spares even the block's.
+        spares even the block's. ``start``: the segment's
+        :meth:`segment_start`, when already read (reading it is a
+        Gauss-Newton fit of its first samples).
         """
         U = np.ascontiguousarray(seg.U)
         T = U.shape[0] - seg.n_skip
         block_length = max(1, min(int(block_length), T))
         if out is None and buffer is None:
             buffer = np.empty((block_length, self.C.shape[0], self.n_params))
-        x = self.segment_start(seg)
+        x = (self.segment_start(seg) if start is None else start).copy()
         Sx = np.zeros((self.n_states, self.n_state_params))
         # The transient before the first row, then the blocks of rows.
         self._sensitivity(U[: seg.n_skip], x, Sx, seg.n_skip, (out if out is not None else buffer)[:0])

@@ -117,15 +117,16 @@ class SimulationError:
             g = np.zeros(model.n_params)
             buffer = None  # one work array for the blocks of all segments
             for seg in segments:
-                err = model.segment_error(seg)
+                start = model.segment_start(seg)  # read once for the error and its Jacobian
+                err = model.segment_error(seg, start)
                 if err is None:
                     return None
                 L = min(block_length(seg, err.shape[1], model.n_params), err.shape[0])
                 if buffer is None or buffer.shape[0] < L:
                     buffer = np.empty((L, err.shape[1], model.n_params))
-                for start, J in model.jacobian_blocks(seg, L, buffer=buffer):
-                    e = weigh(seg, err[start : start + J.shape[0], :, None], start)[:, 0]
-                    Jw = weigh(seg, J, start)
+                for row, J in model.jacobian_blocks(seg, L, buffer=buffer, start=start):
+                    e = weigh(seg, err[row : row + J.shape[0], :, None], row)[:, 0]
+                    Jw = weigh(seg, J, row)
                     G += np.matmul(Jw.T, Jw, out=product)
                     g += Jw.T @ e
             return G, g

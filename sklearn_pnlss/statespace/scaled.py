@@ -177,14 +177,13 @@ def normalised_linear_start(A, B, C, D, X_list, y_list, periods, input_offset=No
     polynomial model without monomials. ``A, B, C, D`` map the deviations
     of the signals from the offsets (None: zero), which the start keeps.
     """
-    m, p = B.shape[1], C.shape[0]
+    n, m, p = A.shape[0], B.shape[1], C.shape[0]
     input_offset = np.zeros(m) if input_offset is None else np.asarray(input_offset, float)
     output_offset = np.zeros(p) if output_offset is None else np.asarray(output_offset, float)
     X_list = [U - input_offset for U in X_list]
     y_list = [Y - output_offset for Y in y_list]
     if np.any(np.all(np.concatenate(X_list) == 0, axis=0)):
         raise ValueError("An input of X is identically zero: no excitation to identify a model from.")
-    n, m = A.shape[0], B.shape[1]
     # Output the states themselves (C = I, D = 0) to measure their rms.
     states = [simulate_linear_signal(A, B, np.eye(n), np.zeros((n, m)), U, periodic_with=per)
               for U, per in zip(X_list, periods)]
