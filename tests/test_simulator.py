@@ -501,3 +501,63 @@ def test_official_training_record_procedure(bouc_wen_dir):
     y_sim = decimate_fir(sim.y, (2, 2, 5))[: 5 * n]
     noise = np.sqrt(np.mean((y - y_sim) ** 2))
     assert noise == pytest.approx(7.4e-6, rel=0.02), noise  # measured 7.37e-6
+
+
+FAST_PATH_ELEMENTS = {
+    "linear": (),
+    "cubic and friction": (CubicStiffness(3e7), CoulombFriction(1.0, 2e-3)),
+    "hysteresis": (BoucWen(1e4, 300.0, 0.8, -1.1, 1.0),),
+    "second mode and damping": (QuadraticDamping(5.0), CoupledMass(0.2, 15.0, 0.2 * (2 * np.pi * 60) ** 2)),
+    "two one-state elements": (BoucWen(1e4, 300.0, 0.8, -1.1, 1.0), SeriesDamper(30.0, 1e4)),
+}
+
+
+@pytest.mark.parametrize("name", sorted(FAST_PATH_ELEMENTS))
+def test_scalar_loops_equal_the_general_loop_to_the_bit(name):
+    """Without sensitivities, up to two internal states run on scalar loops
+    (``_stateless_run``, ``_one_state_run``, ``_two_state_run``); with one
+    sensitivity direction the same steps run in the general loop, whose
+    path the direction does not change: the motions must be identical."""
+    from sklearn_pnlss.physics import oscillator
+
+    osc = Oscillator(2.0, 10.0, 5e4, forces=FAST_PATH_ELEMENTS[name])
+    kinds, p_off, params, z_off, _ = osc._packed
+    nz = osc.n_internal_states
+    u = upsample_fft(5 * _few_line_signal(512, np.arange(2, 60)), 5, periodic=True)
+    runs = []
+    for n_dir in (0, 1):
+        state = np.zeros(oscillator.STATE_Z + 2 * nz)
+        state[0] = 1e-4
+        y, yd, z = np.empty(u.size), np.empty(u.size), np.empty((u.size, nz))
+        tangents = np.zeros((n_dir, state.size))
+        osc._newmark_run(u, u.size - 1, 1 / 3750.0, osc.mass, osc.damping, osc.stiffness, kinds, p_off, params,
+                         z_off, state, True, y, yd, z, oscillator._NEWTON_RTOL, oscillator._NEWTON_MAX_ITER,
+                         tangents, np.zeros(n_dir, dtype=np.int64), np.zeros((u.size, n_dir)))
+        runs.append((y, yd, z, state))
+    assert np.abs(runs[0][0]).max() > 1e-4  # a motion, not rest
+    for fast, general in zip(*runs):
+        np.testing.assert_array_equal(fast, general)
+
+
+def test_a_factored_matrix_solves_as_the_full_elimination():
+    """The sensitivities' one factorisation per step, replayed per
+    direction, and the scalar 3 x 3 solve give the full elimination's
+    numbers to the bit, pivoting included."""
+    from sklearn_pnlss.physics._newmark import _factor_inplace, _solve3, _solve_factored, _solve_inplace
+
+    rng = np.random.default_rng(0)
+    for trial in range(300):
+        n = 2 + trial % 4
+        a = rng.standard_normal((n, n)) * 10.0 ** rng.integers(-3, 4, (n, n))
+        if trial % 5 == 0:
+            a[1:, 0] = 0.0  # zero multipliers are skipped
+        b = rng.standard_normal(n)
+        expected = b.copy()
+        _solve_inplace.py_func(a.copy(), expected, n)
+        factored, pivots = a.copy(), np.zeros(n, dtype=np.int64)
+        _factor_inplace.py_func(factored, pivots, n)
+        got = b.copy()
+        _solve_factored.py_func(factored, pivots, got, n)
+        np.testing.assert_array_equal(got, expected)
+        if n == 3:
+            np.testing.assert_array_equal(np.array(_solve3.py_func(*a.ravel(), *b)), expected)
