@@ -26,6 +26,24 @@ def bouc_wen_dir():
     return path
 
 
+def _f16_folder():
+    """Folder with the F-16 benchmark's files (``SKLEARN_PNLSS_F16_DATA``,
+    else ``../shared/data/f16``), or None when absent."""
+    path = Path(os.environ.get("SKLEARN_PNLSS_F16_DATA", _DEFAULT_DATA.parent / "f16"))
+    for folder in (path, path / "BenchmarkData", path / "F16GVT_Files" / "BenchmarkData"):
+        if (folder / "F16Data_FullMSine_Level3.mat").exists():
+            return folder
+    return None
+
+
+@pytest.fixture(scope="session")
+def f16_dir():
+    path = _f16_folder()
+    if path is None:
+        pytest.skip("F-16 benchmark files not found (../shared/data/f16, or set SKLEARN_PNLSS_F16_DATA)")
+    return path
+
+
 SMALL_PERIOD = 256
 SMALL_FS = 100.0
 

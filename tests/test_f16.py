@@ -1,32 +1,13 @@
 """The F-16 ground vibration test loader, on the measured files when present
-(``SKLEARN_PNLSS_F16_DATA``, or ``../data_f16`` next to the project) and on
-small synthetic files of the same layout otherwise."""
-import os
-from pathlib import Path
-
+(``SKLEARN_PNLSS_F16_DATA``, or ``../shared/data/f16``: the ``f16_dir``
+fixture of conftest) and on small synthetic files of the same layout
+otherwise."""
 import numpy as np
 import pytest
 
 from sklearn_pnlss.datasets import load_f16
 
-_DEFAULT = Path(__file__).resolve().parents[2] / "data_f16"
 PERIOD = 8192
-
-
-def _f16_dir():
-    path = Path(os.environ.get("SKLEARN_PNLSS_F16_DATA", _DEFAULT))
-    for folder in (path, path / "BenchmarkData", path / "F16GVT_Files" / "BenchmarkData"):
-        if (folder / "F16Data_FullMSine_Level3.mat").exists():
-            return folder
-    return None
-
-
-@pytest.fixture(scope="module")
-def f16_dir():
-    path = _f16_dir()
-    if path is None:
-        pytest.skip("F-16 benchmark files not found (set SKLEARN_PNLSS_F16_DATA)")
-    return path
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,5 @@
-"""Physical simulators: an oscillator with nonlinear force elements.
+"""Physical simulators: an oscillator with nonlinear force elements, and a
+structure of several degrees of freedom with nonlinear connections.
 
 The integrator, resampling and noise reproduce the procedure behind the
 Bouc-Wen benchmark data (see :func:`sklearn_pnlss.datasets.simulate_bouc_wen`).
@@ -18,9 +19,11 @@ from .forces import (
 )
 from .oscillator import FineSimulation, Oscillator, band_limited_noise
 from .resampling import decimate_fir, fir_decimation_filter, upsample_fft
+from .structure import SENSOR_KINDS, Connection, Structure, StructureSimulation
 
 __all__ = [
     "BoucWen",
+    "Connection",
     "CoulombFriction",
     "CoupledMass",
     "CubicStiffness",
@@ -31,8 +34,11 @@ __all__ = [
     "Oscillator",
     "QuadraticDamping",
     "QuadraticStiffness",
+    "SENSOR_KINDS",
     "SeriesDamper",
     "StiffnessDrift",
+    "Structure",
+    "StructureSimulation",
     "band_limited_noise",
     "decimate_fir",
     "fir_decimation_filter",

@@ -47,13 +47,17 @@ class PeriodShooter:
         ``idx`` at the period's end by those at its start (the rates
         recomputed from the equation of motion), from ``state``; None:
         forward differences.
+    positions : array-like of int, default=None
+        Where the positions sit in the state (default: the single
+        oscillator's displacement, velocity and internal states).
     """
 
-    def __init__(self, run_period, n_states, n_internal, period_jacobian=None):
+    def __init__(self, run_period, n_states, n_internal, period_jacobian=None, positions=None):
         self.run_period = run_period
         self.period_jacobian = period_jacobian
         self.n_states = n_states
-        self.idx = np.r_[STATE_Y, STATE_YD, STATE_Z:STATE_Z + n_internal]
+        self.idx = (np.r_[STATE_Y, STATE_YD, STATE_Z:STATE_Z + n_internal] if positions is None
+                    else np.asarray(positions, dtype=np.int64))
         self.jac = None  # Jacobian of G(p) = F(p) - p
         self.previous = None  # (p, G(p), scaled |G|) of the last step
         self.active = True

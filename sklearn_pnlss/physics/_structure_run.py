@@ -1,0 +1,244 @@
+"""Compiled Newmark integrator of a linear structure with nonlinear connections.
+
+Equation: ``M ydd + C yd + K y + D F(D^T y, D^T yd, z) = P u``, where
+column ``c`` of ``D`` maps the degrees of freedom to connection ``c``'s
+relative displacement (a point's displacement less another's, or less the
+ground's) and ``F`` are the force elements of :mod:`.forces`, one per
+connection, acting on that relative motion; internal states follow
+``zd = g(D^T y, D^T yd, z)``.  ``y`` uses Newmark average acceleration, ``z``
+the trapezoidal rule, as the single oscillator of :mod:`._newmark` does.
+
+Why a second kernel: the step's equations are linear in ``y`` but for the
+connections, so ``y_{n+1} = y_lin - W F`` with ``y_lin`` the linear
+structure's step and ``W = K_eff^{-1} D``; only the connections' relative
+motions ``r = D^T y`` and the internal states are solved by Newton
+(``r = D^T y_lin - G F(r)``, ``G = D^T W``): a handful of unknowns whatever
+the number of degrees of freedom, where Newton on all of ``y`` would solve
+an n x n system per iteration.  The linear step is three matrix-vector
+products with matrices made once per step length.
+"""
+import numpy as np
+from numba import njit
+
+from ._newmark import _force, _rate, _solve_inplace
+
+_JIT = dict(cache=True, nogil=True)
+
+
+@njit(**_JIT)
+def _matvec_add(out, a, x, scale):
+    """out += scale * a @ x (a small dense matrix)."""
+    for i in range(a.shape[0]):
+        s = 0.0
+        for j in range(a.shape[1]):
+            s += a[i, j] * x[j]
+        out[i] += scale * s
+
+
+@njit(**_JIT)
+def _relative(d_mat, vec, out):
+    """out = D^T vec: the connections' relative motions."""
+    for c in range(d_mat.shape[1]):
+        s = 0.0
+        for j in range(d_mat.shape[0]):
+            s += d_mat[j, c] * vec[j]
+        out[c] = s
+
+
+@njit(**_JIT)
+def _connection_forces(kinds, p_off, params, z_off, r, rd, z, forces, dfdr, dfdrd, dfdz):
+    """Each connection's force at its relative motion ``(r, rd)`` and the
+    states ``z``, with its derivatives (``dfdz`` at the states' indices)."""
+    for e in range(kinds.shape[0]):
+        f, fr, frd = _force(kinds[e], params, p_off[e], p_off[e + 1], r[e], rd[e], z, z_off[e], dfdz)
+        forces[e] = f
+        dfdr[e] = fr
+        dfdrd[e] = frd
+
+
+@njit(**_JIT)
+def _state_rates(kinds, p_off, params, z_off, r, rd, z, g, dgdy, dgdyd, dgdz):
+    for e in range(kinds.shape[0]):
+        a, b = z_off[e], z_off[e + 1]
+        if b > a:
+            _rate(kinds[e], params, p_off[e], r[e], rd[e], z, a, b, g, dgdy, dgdyd, dgdz)
+
+
+@njit(**_JIT)
+def structure_run(u, n_steps, h, a_u, a_y, a_yd, a_ydd, w, g_mat, d_mat, p_mat, c_mat, k_mat, m_inv,
+                  kinds, p_off, params, z_off, state, init_accel, y_out, yd_out, ydd_out, z_out, rtol, max_iter):
+    """Integrate ``n_steps`` steps of length ``h`` from ``state`` (updated in
+    place), laid out as ``[y (n), yd (n), ydd (n), z (nz), zd (nz)]``.
+
+    Step ``i`` goes from time ``i h`` to ``(i + 1) h`` with the input row
+    ``u[(i + 1) % len(u)]``; sample ``i`` of the outputs is the state at
+    ``i h`` (the first ``len(y_out)`` samples are stored).  ``a_*`` are the
+    linear step's matrices (``y_lin = a_u u + a_y y + a_yd yd + a_ydd ydd``),
+    ``w = K_eff^{-1} D``, ``g_mat = D^T w``; ``p_mat, c_mat, k_mat, m_inv``
+    give the starting acceleration when ``init_accel``.
+
+    Returns
+    -------
+    n_failed : int
+        Steps where Newton did not reach ``rtol`` within ``max_iter``.
+    """
+    n = d_mat.shape[0]
+    n_c = kinds.shape[0]
+    nz = z_off[n_c]
+    n_x = n_c + nz
+    n_u = u.shape[0]
+    n_out = y_out.shape[0]
+    c_acc = 4.0 / (h * h)
+    c_vel = 2.0 / h
+    half_h = 0.5 * h
+
+    y = state[0:n].copy()
+    yd = state[n:2 * n].copy()
+    ydd = state[2 * n:3 * n].copy()
+    z = state[3 * n:3 * n + nz].copy()
+    zd = state[3 * n + nz:3 * n + 2 * nz].copy()
+
+    r = np.zeros(n_c)
+    rd = np.zeros(n_c)
+    r_prev = np.zeros(n_c)
+    rd_prev = np.zeros(n_c)
+    r_lin = np.zeros(n_c)
+    forces = np.zeros(n_c)
+    dfdr = np.zeros(n_c)
+    dfdrd = np.zeros(n_c)
+    dfdz = np.zeros(nz)
+    g = np.zeros(nz)
+    dgdy = np.zeros(nz)
+    dgdyd = np.zeros(nz)
+    dgdz = np.zeros((nz, nz))
+    zq = np.zeros(nz)
+    owner = np.zeros(nz, dtype=np.int64)  # the connection each state belongs to
+    for e in range(n_c):
+        for j in range(z_off[e], z_off[e + 1]):
+            owner[j] = e
+    jac = np.zeros((n_x, n_x))
+    res = np.zeros(n_x)
+    peak = np.zeros(n_x)
+    y_lin = np.zeros(n)
+
+    _relative(d_mat, y, r)
+    _relative(d_mat, yd, rd)
+    if init_accel:
+        _connection_forces(kinds, p_off, params, z_off, r, rd, z, forces, dfdr, dfdrd, dfdz)
+        load = np.zeros(n)
+        _matvec_add(load, p_mat, u[0], 1.0)
+        _matvec_add(load, c_mat, yd, -1.0)
+        _matvec_add(load, k_mat, y, -1.0)
+        _matvec_add(load, d_mat, forces, -1.0)
+        for i in range(n):
+            ydd[i] = 0.0
+        _matvec_add(ydd, m_inv, load, 1.0)
+        _state_rates(kinds, p_off, params, z_off, r, rd, z, zd, dgdy, dgdyd, dgdz)
+    for c in range(n_c):
+        peak[c] = abs(r[c])
+    for j in range(nz):
+        peak[n_c + j] = abs(z[j])
+
+    n_failed = 0
+    for i in range(n_steps + 1):
+        if i < n_out:
+            for j in range(n):
+                y_out[i, j] = y[j]
+                yd_out[i, j] = yd[j]
+                ydd_out[i, j] = ydd[j]
+            for j in range(nz):
+                z_out[i, j] = z[j]
+        if i == n_steps:
+            break
+        u1 = u[(i + 1) % n_u]
+        for j in range(n):
+            y_lin[j] = 0.0
+        _matvec_add(y_lin, a_u, u1, 1.0)
+        _matvec_add(y_lin, a_y, y, 1.0)
+        _matvec_add(y_lin, a_yd, yd, 1.0)
+        _matvec_add(y_lin, a_ydd, ydd, 1.0)
+        _relative(d_mat, y_lin, r_lin)
+        _relative(d_mat, y, r_prev)
+        _relative(d_mat, yd, rd_prev)
+        # predictor: the linear structure's step for the connections, the
+        # states' rates held
+        for c in range(n_c):
+            r[c] = r_lin[c]
+        for j in range(nz):
+            zq[j] = z[j] + half_h * zd[j]
+
+        converged = False
+        for it in range(max_iter):
+            for c in range(n_c):
+                rd[c] = c_vel * (r[c] - r_prev[c]) - rd_prev[c]
+            _connection_forces(kinds, p_off, params, z_off, r, rd, zq, forces, dfdr, dfdrd, dfdz)
+            _state_rates(kinds, p_off, params, z_off, r, rd, zq, g, dgdy, dgdyd, dgdz)
+            for a in range(n_x):
+                for b in range(n_x):
+                    jac[a, b] = 0.0
+            for c in range(n_c):
+                s = r[c] - r_lin[c]
+                for k in range(n_c):
+                    s += g_mat[c, k] * forces[k]
+                    jac[c, k] = g_mat[c, k] * (dfdr[k] + dfdrd[k] * c_vel)
+                jac[c, c] += 1.0
+                for j in range(nz):
+                    jac[c, n_c + j] = g_mat[c, owner[j]] * dfdz[j]
+                res[c] = -s
+            for j in range(nz):
+                e = owner[j]
+                res[n_c + j] = -(zq[j] - z[j] - half_h * (zd[j] + g[j]))
+                jac[n_c + j, e] = -half_h * (dgdy[j] + dgdyd[j] * c_vel)
+                for col in range(z_off[e], z_off[e + 1]):
+                    jac[n_c + j, n_c + col] = -half_h * dgdz[j, col]
+                jac[n_c + j, n_c + j] += 1.0
+            _solve_inplace(jac, res, n_x)
+            ok = True
+            finite = True
+            for a in range(n_x):
+                if a < n_c:
+                    r[a] += res[a]
+                    value = r[a]
+                else:
+                    zq[a - n_c] += res[a]
+                    value = zq[a - n_c]
+                if not np.isfinite(value):
+                    finite = False
+                if abs(res[a]) > rtol * max(abs(value), peak[a]):
+                    ok = False
+            if not finite:
+                break
+            if ok:
+                converged = True
+                break
+        if not converged:
+            n_failed += 1
+
+        # the step's end: the connections' forces at the solution move the
+        # linear structure's step
+        for c in range(n_c):
+            rd[c] = c_vel * (r[c] - r_prev[c]) - rd_prev[c]
+        _connection_forces(kinds, p_off, params, z_off, r, rd, zq, forces, dfdr, dfdrd, dfdz)
+        for j in range(n):
+            s = y_lin[j]
+            for c in range(n_c):
+                s -= w[j, c] * forces[c]
+            ydd[j] = c_acc * (s - y[j] - h * yd[j]) - ydd[j]
+            yd[j] = c_vel * (s - y[j]) - yd[j]
+            y[j] = s
+        for j in range(nz):
+            z[j] = zq[j]
+        _relative(d_mat, y, r)
+        _relative(d_mat, yd, rd)
+        _state_rates(kinds, p_off, params, z_off, r, rd, z, zd, dgdy, dgdyd, dgdz)
+        for c in range(n_c):
+            peak[c] = max(peak[c], abs(r[c]))
+        for j in range(nz):
+            peak[n_c + j] = max(peak[n_c + j], abs(z[j]))
+
+    state[0:n] = y
+    state[n:2 * n] = yd
+    state[2 * n:3 * n] = ydd
+    state[3 * n:3 * n + nz] = z
+    state[3 * n + nz:3 * n + 2 * nz] = zd
+    return n_failed

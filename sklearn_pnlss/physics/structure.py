@@ -1,0 +1,474 @@
+"""A linear structure of several degrees of freedom with nonlinear connections.
+
+The structure is given by its mass, damping and stiffness matrices, or by
+its modes (frequencies, damping ratios and mass-normalised shapes at the
+points that matter).  Either way it has named *points*: forces enter at
+points, sensors measure a point's displacement, velocity or acceleration,
+and every nonlinear element is a :class:`Connection` between two points, or
+between a point and the ground, acting on their relative motion.
+"""
+import warnings
+from dataclasses import dataclass
+from numbers import Integral
+
+import numpy as np
+from sklearn.exceptions import ConvergenceWarning
+
+from ._shooting import PeriodShooter
+from ._structure_run import structure_run
+from .forces import KIND_CUSTOM, ForceElement, pack_forces
+from .oscillator import _NEWTON_MAX_ITER, _NEWTON_RTOL, _SHOOT_AFTER, _futile, _positive_real
+from .resampling import check_signal, decimate_columns, upsample_fft
+
+__all__ = ["Connection", "Structure", "StructureSimulation", "SENSOR_KINDS"]
+
+#: What a sensor measures at its point.
+SENSOR_KINDS = ("displacement", "velocity", "acceleration")
+
+
+@dataclass(frozen=True)
+class Connection:
+    """A force element acting on the relative motion of two points.
+
+    Parameters
+    ----------
+    element : ForceElement
+        The force law, e.g. ``CubicStiffness(1e7)``, with ``y`` the
+        displacement of ``point`` less that of ``other``.
+    point : str
+        Where the element acts.
+    other : str or None, default=None
+        The point it connects ``point`` to; None: the ground.
+
+    Examples
+    --------
+    >>> from sklearn_pnlss.physics import Connection, CubicStiffness
+    >>> Connection(CubicStiffness(1e7), "wing", "payload").other
+    'payload'
+    """
+
+    element: ForceElement
+    point: str
+    other: str = None
+
+    def __post_init__(self):
+        if not isinstance(self.element, ForceElement):
+            raise TypeError(f"element must be a ForceElement (e.g. CubicStiffness(1e7)), got {self.element!r}.")
+        if self.element.kind == KIND_CUSTOM:
+            raise ValueError("a Connection takes the built-in force elements; a CustomForce acts on a "
+                             "single Oscillator only.")
+        if self.element.time_varying:
+            raise ValueError("a Connection takes time-invariant force elements; a StiffnessDrift acts on a "
+                             "single Oscillator only.")
+        if self.other is not None and self.other == self.point:
+            raise ValueError(f"a Connection joins two different points, got {self.point!r} twice.")
+
+
+@dataclass
+class StructureSimulation:
+    """Motion of a structure at the integration rate.
+
+    Attributes
+    ----------
+    y, yd, ydd : ndarray of shape (n_samples, n_dof)
+        Displacement, velocity and acceleration of the degrees of freedom
+        (modal coordinates for a structure given by its modes).
+    z : ndarray of shape (n_samples, n_internal_states)
+        Internal states of the connections' elements.
+    fs : float
+        Integration rate.
+    n_periods : int
+        Periods simulated, the returned one included (1 if not periodic).
+    n_newton_failures : int
+        Steps where Newton-Raphson did not reach full convergence.
+    final_state : ndarray
+        The integrator's state after the last step,
+        ``[y, yd, ydd, z, zd]``, to continue from.
+    """
+
+    y: np.ndarray
+    yd: np.ndarray
+    ydd: np.ndarray
+    z: np.ndarray
+    fs: float
+    n_periods: int
+    n_newton_failures: int
+    final_state: np.ndarray
+
+
+def _square(name, value, n=None):
+    a = np.atleast_2d(np.asarray(value, dtype=np.float64))
+    if a.ndim != 2 or a.shape[0] != a.shape[1]:
+        raise ValueError(f"{name} must be a square matrix, got shape {np.shape(value)}.")
+    if n is not None and a.shape[0] != n:
+        raise ValueError(f"{name} must be {n} x {n} like mass, got shape {a.shape}.")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} contains NaN or infinite values.")
+    return a
+
+
+class Structure:
+    r"""Linear structure with nonlinear connections between its points.
+
+    .. math:: M \ddot q + C \dot q + K q + \sum_c d_c\, F_c(d_c^T q,
+              d_c^T \dot q, z_c) = \sum_i \phi_i^T u_i
+
+    where ``q`` are the degrees of freedom, row ``phi_p`` of the point
+    matrix gives point ``p``'s displacement ``phi_p q``, and
+    ``d_c = phi_a - phi_b`` for a connection between points ``a`` and ``b``
+    (``phi_a`` for one to the ground).  Integrated as :class:`Oscillator`
+    is: Newmark average acceleration, trapezoidal internal states, a fully
+    converged Newton step; only the connections' relative motions and
+    states are Newton's unknowns.
+
+    Parameters
+    ----------
+    mass, damping, stiffness : array-like of shape (n_dof, n_dof)
+        Symmetric matrices (a number for one degree of freedom); ``mass``
+        positive definite.
+    points : sequence of str, default=None
+        Names of the degrees of freedom, which are the points (default
+        ``"0"``, ``"1"``, ...).
+    connections : sequence of Connection, default=()
+
+    Examples
+    --------
+    Two masses in a chain, a cubic spring between them, accelerometers on
+    both:
+
+    >>> import numpy as np
+    >>> from sklearn_pnlss.physics import Connection, CubicStiffness, Structure
+    >>> k = 4e4
+    >>> chain = Structure(np.diag([2.0, 1.0]), np.array([[20.0, -5.0], [-5.0, 5.0]]),
+    ...                   np.array([[2 * k, -k], [-k, k]]), points=["base", "tip"],
+    ...                   connections=[Connection(CubicStiffness(1e9), "tip", "base")])
+    >>> u = 20 * np.sin(2 * np.pi * 15 * np.arange(2000) / 2000)
+    >>> a = chain.simulate(u, fs=2000.0, inputs=["base"],
+    ...                    sensors=[("base", "acceleration"), ("tip", "acceleration")])
+    >>> a.shape
+    (2000, 2)
+    """
+
+    def __init__(self, mass, damping, stiffness, *, points=None, connections=()):
+        self.mass = _square("mass", mass)
+        n = self.mass.shape[0]
+        self.damping = _square("damping", damping, n)
+        self.stiffness = _square("stiffness", stiffness, n)
+        if np.any(np.linalg.eigvalsh(0.5 * (self.mass + self.mass.T)) <= 0):
+            raise ValueError("mass must be positive definite.")
+        self.points = tuple(str(p) for p in (range(n) if points is None else points))
+        if len(self.points) != n or len(set(self.points)) != n:
+            raise ValueError(f"points must name each of the {n} degrees of freedom once, got {points!r}.")
+        self.point_matrix = np.eye(n)
+        self.connections = tuple(connections)
+        self._check_connections()
+
+    @classmethod
+    def from_modes(cls, frequencies, damping_ratios, mode_shapes, *, points, connections=()):
+        """A structure given by its modes at the points that matter.
+
+        Parameters
+        ----------
+        frequencies : array-like of shape (n_modes,)
+            Natural frequencies, Hz (> 0).
+        damping_ratios : array-like of shape (n_modes,)
+            Viscous damping ratios (>= 0).
+        mode_shapes : array-like of shape (n_points, n_modes)
+            Mass-normalised mode shapes at ``points``: point ``p``'s
+            displacement is ``mode_shapes[p] @ q`` for modal coordinates ``q``.
+        points : sequence of str
+        connections : sequence of Connection, default=()
+
+        Returns
+        -------
+        structure : Structure
+            Its degrees of freedom are the modal coordinates.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from sklearn_pnlss.physics import Structure
+        >>> s = Structure.from_modes([5.0, 12.0], [0.02, 0.01], [[0.5, 0.4], [0.6, -0.3]],
+        ...                          points=["wing", "payload"])
+        >>> np.round(np.sqrt(np.diag(s.stiffness)) / (2 * np.pi), 6)
+        array([ 5., 12.])
+        """
+        f = np.atleast_1d(np.asarray(frequencies, dtype=np.float64))
+        zeta = np.atleast_1d(np.asarray(damping_ratios, dtype=np.float64))
+        shapes = np.atleast_2d(np.asarray(mode_shapes, dtype=np.float64))
+        if f.ndim != 1 or not np.all(np.isfinite(f)) or np.any(f <= 0):
+            raise ValueError(f"frequencies must be positive finite numbers, got {frequencies!r}.")
+        if zeta.shape != f.shape or not np.all(np.isfinite(zeta)) or np.any(zeta < 0):
+            raise ValueError(f"damping_ratios must be {f.size} non-negative numbers, got {damping_ratios!r}.")
+        points = [str(p) for p in points]
+        if shapes.shape != (len(points), f.size) or not np.all(np.isfinite(shapes)):
+            raise ValueError(f"mode_shapes must be finite, of shape (n_points, n_modes) = "
+                             f"({len(points)}, {f.size}), got {np.shape(mode_shapes)}.")
+        if len(set(points)) != len(points):
+            raise ValueError(f"points must be distinct names, got {points!r}.")
+        omega = 2 * np.pi * f
+        out = cls.__new__(cls)
+        out.mass = np.eye(f.size)
+        out.damping = np.diag(2 * zeta * omega)
+        out.stiffness = np.diag(omega**2)
+        out.points = tuple(points)
+        out.point_matrix = shapes
+        out.connections = tuple(connections)
+        out._check_connections()
+        return out
+
+    def _check_connections(self):
+        for i, c in enumerate(self.connections):
+            if not isinstance(c, Connection):
+                raise TypeError(f"connections[{i}] must be a Connection, got {c!r}.")
+            for p in (c.point, c.other):
+                if p is not None and p not in self.points:
+                    raise ValueError(f"connections[{i}] names the point {p!r}, which is not one of {self.points}.")
+        self._packed = pack_forces([c.element for c in self.connections])
+        self._directions = np.zeros((self.n_dof, len(self.connections)))
+        for i, c in enumerate(self.connections):
+            self._directions[:, i] = self._row(c.point) - (0.0 if c.other is None else self._row(c.other))
+
+    def __repr__(self):
+        return f"Structure(n_dof={self.n_dof}, points={self.points!r}, connections={self.connections!r})"
+
+    @property
+    def n_dof(self):
+        """Number of degrees of freedom (modes for a modal structure)."""
+        return self.mass.shape[0]
+
+    @property
+    def n_internal_states(self):
+        """Internal states of the connections' elements."""
+        return int(self._packed[3][-1])
+
+    def _row(self, point):
+        return self.point_matrix[self.points.index(point)]
+
+    def _input_matrix(self, inputs):
+        inputs = [inputs] if isinstance(inputs, str) else list(inputs)
+        for p in inputs:
+            if p not in self.points:
+                raise ValueError(f"inputs names the point {p!r}, which is not one of {self.points}.")
+        return np.stack([self._row(p) for p in inputs], axis=1), len(inputs)
+
+    def frequency_response(self, freqs, *, inputs, sensors):
+        """The linear structure's frequency response (connections left out).
+
+        Parameters
+        ----------
+        freqs : array-like of shape (n_freqs,)
+            Frequencies, Hz.
+        inputs : sequence of str
+            Points where the forces enter.
+        sensors : sequence of (str, str)
+            ``(point, kind)``, ``kind`` one of :data:`SENSOR_KINDS`.
+
+        Returns
+        -------
+        H : ndarray of shape (n_freqs, n_sensors, n_inputs), complex
+        """
+        p_mat, _ = self._input_matrix(inputs)
+        rows, powers = self._sensor_rows(sensors)
+        out = []
+        for f in np.atleast_1d(np.asarray(freqs, dtype=np.float64)):
+            s = 2j * np.pi * f
+            q = np.linalg.solve(s * s * self.mass + s * self.damping + self.stiffness, p_mat)
+            out.append((rows * s ** powers[:, None]) @ q)
+        return np.array(out)
+
+    def _sensor_rows(self, sensors):
+        rows, powers = [], []
+        for i, sensor in enumerate(sensors):
+            if not (isinstance(sensor, (tuple, list)) and len(sensor) == 2):
+                raise ValueError(f"sensors[{i}] must be a (point, kind) pair, got {sensor!r}.")
+            point, kind = sensor
+            if point not in self.points:
+                raise ValueError(f"sensors[{i}] names the point {point!r}, which is not one of {self.points}.")
+            if kind not in SENSOR_KINDS:
+                raise ValueError(f"sensors[{i}] measures {kind!r}; use one of {SENSOR_KINDS}.")
+            rows.append(self._row(point))
+            powers.append(SENSOR_KINDS.index(kind))
+        return np.array(rows).reshape(len(rows), self.n_dof), np.array(powers)
+
+    def measure(self, sim, sensors):
+        """The sensors' records of a :class:`StructureSimulation`.
+
+        Returns
+        -------
+        records : ndarray of shape (n_samples, n_sensors)
+        """
+        rows, powers = self._sensor_rows(sensors)
+        motion = (sim.y, sim.yd, sim.ydd)
+        return np.stack([motion[k] @ row for row, k in zip(rows, powers)], axis=1)
+
+    def _step_matrices(self, h, p_mat):
+        """The linear step's matrices for step length ``h`` (see
+        :func:`~sklearn_pnlss.physics._structure_run.structure_run`)."""
+        c_acc, c_vel = 4.0 / h**2, 2.0 / h
+        m, c, k, d = self.mass, self.damping, self.stiffness, self._directions
+        k_eff = c_acc * m + c_vel * c + k
+        solve = lambda b: np.linalg.solve(k_eff, b)  # noqa: E731
+        w = solve(d)
+        return dict(a_u=solve(p_mat), a_y=solve(c_acc * m + c_vel * c), a_yd=solve(c_acc * h * m + c),
+                    a_ydd=solve(m), w=w, g_mat=d.T @ w)
+
+    def _positions(self):
+        n, nz = self.n_dof, self.n_internal_states
+        return np.r_[0:2 * n, 3 * n:3 * n + nz]
+
+    def simulate_fine(self, u_fine, *, fs, inputs, periodic=False, tol=1e-9, max_periods=50,
+                      initial_state=None, warn=True):
+        """Simulate at the integration rate.
+
+        Parameters
+        ----------
+        u_fine : array-like of shape (n_samples,) or (n_samples, n_inputs)
+            Forces at ``inputs``, at rate ``fs`` (one period when ``periodic``).
+        fs : float
+            Integration rate, Hz.
+        inputs : str or sequence of str
+            The points the forces act on, one per column of ``u_fine``.
+        periodic : bool, default=False
+            True: the periodic steady state (period after period, with
+            Newton steps on the period map, until a period ends within
+            ``tol`` of its start, relative to each position's peak).
+        tol : float, default=1e-9
+        max_periods : int, default=50
+        initial_state : ndarray, default=None
+            A ``final_state`` to start from (default: rest).
+        warn : bool, default=True
+            Warn when the steady state is not reached.
+
+        Returns
+        -------
+        StructureSimulation
+        """
+        p_mat, n_in = self._input_matrix(inputs)
+        u = np.asarray(u_fine, dtype=np.float64)
+        u = u.reshape(-1, 1) if u.ndim == 1 else u
+        if u.ndim != 2 or u.shape[1] != n_in or u.shape[0] < 2:
+            raise ValueError(f"u_fine must have one column per input point ({n_in}) and at least 2 samples, "
+                             f"got shape {np.shape(u_fine)}.")
+        if not np.all(np.isfinite(u)):
+            raise ValueError("u_fine contains NaN or infinite values.")
+        u = np.ascontiguousarray(u)
+        fs = _positive_real("fs", fs)
+        h, n = 1.0 / fs, u.shape[0]
+        mats = self._step_matrices(h, p_mat)
+        n_dof, nz = self.n_dof, self.n_internal_states
+        state = np.zeros(3 * n_dof + 2 * nz)
+        if initial_state is not None:
+            initial_state = np.asarray(initial_state, dtype=np.float64)
+            if initial_state.shape != state.shape or not np.all(np.isfinite(initial_state)):
+                raise ValueError(f"initial_state must be a finite final_state of this structure "
+                                 f"(shape {state.shape}), got shape {initial_state.shape}.")
+            state = initial_state.copy()
+        m_inv = np.linalg.inv(self.mass)
+
+        def run(state, init, n_steps):
+            y, yd, ydd = (np.empty((n, n_dof)) for _ in range(3))
+            z = np.empty((n, nz))
+            kinds, p_off, params, z_off, _ = self._packed
+            failed = structure_run(u, n_steps, h, mats["a_u"], mats["a_y"], mats["a_yd"], mats["a_ydd"], mats["w"],
+                                   mats["g_mat"], self._directions, p_mat, self.damping, self.stiffness, m_inv,
+                                   kinds, p_off, params, z_off, state, init, y, yd, ydd, z, _NEWTON_RTOL,
+                                   _NEWTON_MAX_ITER)
+            if not np.all(np.isfinite(state)):
+                raise FloatingPointError("the simulation diverged (non-finite state).")
+            return y, yd, ydd, z, failed
+
+        if not periodic:
+            y, yd, ydd, z, failed = run(state, True, n - 1)
+            return StructureSimulation(y, yd, ydd, z, fs, 1, failed, state)
+        if isinstance(max_periods, bool) or not isinstance(max_periods, Integral) or max_periods < 1:
+            raise ValueError(f"max_periods must be a positive int, got {max_periods!r}.")
+        idx = self._positions()
+        linear_map = self._linear_period_map(mats, h, n) if nz == 0 else None
+        shooter = PeriodShooter(lambda st, ini: run(st, ini, n)[:2], state.size, nz,
+                                None if linear_map is None else (lambda st, i: linear_map), positions=idx)
+        init, period, total_failed, converged, plain = True, 0, 0, False, []
+        while period < max_periods:
+            start = state.copy()
+            y, yd, ydd, z, failed = run(state, init, n)
+            init, period, total_failed = False, period + 1, total_failed + failed
+            traces = [y[:, j] for j in range(n_dof)] + [yd[:, j] for j in range(n_dof)] + [z[:, j] for j in range(nz)]
+            scale = np.array([max(np.max(np.abs(t)), 1e-300) for t in traces])
+            change = float(np.max(np.abs(state[idx] - start[idx]) / scale))
+            if period > 1 and change <= tol:
+                converged = True
+                break
+            if not shooter.active:
+                plain.append(change)
+                if _futile(plain, tol, max_periods - period):
+                    break
+            # a linear structure's period map is known: shoot at once
+            if (period >= _SHOOT_AFTER or linear_map is not None) and period < max_periods:
+                shot, used = shooter.step(start, state, traces, max_periods - period - 1)
+                period += used
+                if shot is not None:
+                    state, init = shot, True
+        if not converged and warn:
+            warnings.warn(f"periodic steady state not reached within max_periods={max_periods} periods "
+                          f"(tolerance {tol:g}); the last period is returned.", ConvergenceWarning, stacklevel=2)
+        return StructureSimulation(y, yd, ydd, z, fs, period, total_failed, state)
+
+    def _linear_period_map(self, mats, h, n_steps):
+        """The derivatives of the positions ``(q, qd)`` after ``n_steps``
+        steps by those at the start (the acceleration set by the equation
+        of motion), for the structure without its connections: the step's
+        matrix raised to the period by squaring."""
+        n = self.n_dof
+        c_acc, c_vel = 4.0 / h**2, 2.0 / h
+        eye = np.eye(n)
+        a_y, a_yd, a_ydd = mats["a_y"], mats["a_yd"], mats["a_ydd"]
+        step = np.block([[a_y, a_yd, a_ydd],
+                         [c_vel * (a_y - eye), c_vel * a_yd - eye, c_vel * a_ydd],
+                         [c_acc * (a_y - eye), c_acc * (a_yd - h * eye), c_acc * a_ydd - eye]])
+        power, base, k = np.eye(3 * n), step, int(n_steps)
+        while k:
+            if k & 1:
+                power = base @ power
+            base = base @ base
+            k >>= 1
+        m_inv = np.linalg.inv(self.mass)
+        lift = np.vstack([np.eye(2 * n), np.hstack([-m_inv @ self.stiffness, -m_inv @ self.damping])])
+        return power[:2 * n] @ lift
+
+    def simulate(self, u, *, fs, inputs, sensors, periodic=False, oversampling=5, decimation=(5,)):
+        """The sensors' records at the data rate.
+
+        The inputs are interpolated to ``oversampling * fs`` by FFT,
+        integrated there and the sensors' records decimated by the FIR chain
+        ``decimation``, as :meth:`Oscillator.simulate` does.
+
+        Parameters
+        ----------
+        u : array-like of shape (n_samples,) or (n_samples, n_inputs)
+            Forces at rate ``fs`` (one period when ``periodic``).
+        fs : float
+        inputs : str or sequence of str
+        sensors : sequence of (str, str)
+            ``(point, kind)``, ``kind`` one of :data:`SENSOR_KINDS`.
+        periodic : bool, default=False
+        oversampling : int, default=5
+        decimation : sequence of int, default=(5,)
+            Its product must equal ``oversampling``.
+
+        Returns
+        -------
+        records : ndarray of shape (n_samples, n_sensors)
+        """
+        u = np.asarray(u, dtype=np.float64)
+        columns = [u] if u.ndim == 1 else [u[:, j] for j in range(u.shape[1])]
+        if not isinstance(oversampling, Integral) or oversampling < 1 or int(np.prod(decimation)) != oversampling:
+            raise ValueError(f"oversampling must be a positive int equal to the product of decimation "
+                             f"{tuple(decimation)}, got {oversampling!r}.")
+        u_fine = np.stack([upsample_fft(check_signal(c, "u"), oversampling, periodic=periodic) for c in columns],
+                          axis=1)
+        sim = self.simulate_fine(u_fine, fs=fs * oversampling, inputs=inputs, periodic=periodic)
+        if sim.n_newton_failures:
+            warnings.warn(f"Newton-Raphson did not fully converge in {sim.n_newton_failures} integration steps.",
+                          ConvergenceWarning, stacklevel=2)
+        return decimate_columns(self.measure(sim, sensors), decimation, periodic=periodic)
+
