@@ -14,13 +14,18 @@ structure's step and ``W = K_eff^{-1} D``; only the connections' relative
 motions ``r = D^T y`` and the internal states are solved by Newton
 (``r = D^T y_lin - G F(r)``, ``G = D^T W``): a handful of unknowns whatever
 the number of degrees of freedom, where Newton on all of ``y`` would solve
-an n x n system per iteration.  The linear step is three matrix-vector
+an n x n system per iteration.  The linear step is four matrix-vector
 products with matrices made once per step length.
+
+Sensitivities: the converged step's equations differentiated (the Newton
+matrix at the solution, factored once per step and solved for every
+direction), as :mod:`._newmark` does for the oscillator; a direction moves
+the start state or one element parameter.
 """
 import numpy as np
 from numba import njit
 
-from ._newmark import _force, _rate, _solve_inplace
+from ._newmark import _dparams, _factor_inplace, _force, _rate, _solve_factored
 
 _JIT = dict(cache=True, nogil=True)
 
@@ -65,8 +70,51 @@ def _state_rates(kinds, p_off, params, z_off, r, rd, z, g, dgdy, dgdyd, dgdz):
 
 
 @njit(**_JIT)
+def _parameter_partials(kinds, p_off, params, z_off, r, rd, z, dfdp, dgdp):
+    """Every element's force and rate derivatives by its parameters."""
+    for e in range(kinds.shape[0]):
+        _dparams(kinds[e], params, p_off[e], p_off[e + 1], r[e], rd[e], z, z_off[e], z_off[e + 1], dfdp, dgdp)
+
+
+@njit(**_JIT)
+def _newton_matrix(jac, g_mat, z_off, owner, dfdr, dfdrd, dfdz, dgdy, dgdyd, dgdz, c_vel, half_h):
+    """The step's Newton matrix in ``(r, z)`` at the point whose partial
+    derivatives are given."""
+    n_c = g_mat.shape[0]
+    nz = owner.shape[0]
+    n_x = n_c + nz
+    for a in range(n_x):
+        for b in range(n_x):
+            jac[a, b] = 0.0
+    for c in range(n_c):
+        for k in range(n_c):
+            jac[c, k] = g_mat[c, k] * (dfdr[k] + dfdrd[k] * c_vel)
+        jac[c, c] += 1.0
+        for j in range(nz):
+            jac[c, n_c + j] = g_mat[c, owner[j]] * dfdz[j]
+    for j in range(nz):
+        e = owner[j]
+        jac[n_c + j, e] = -half_h * (dgdy[j] + dgdyd[j] * c_vel)
+        for col in range(z_off[e], z_off[e + 1]):
+            jac[n_c + j, n_c + col] = -half_h * dgdz[j, col]
+        jac[n_c + j, n_c + j] += 1.0
+
+
+@njit(**_JIT)
+def _record_sensors(out, i, s_rows, s_kind, y, yd, ydd, d):
+    """``out[i, k, d]``: sensor ``k``'s reading of the motion (y, yd, ydd)."""
+    for k in range(s_rows.shape[0]):
+        s = 0.0
+        for j in range(s_rows.shape[1]):
+            v = y[j] if s_kind[k] == 0 else (yd[j] if s_kind[k] == 1 else ydd[j])
+            s += s_rows[k, j] * v
+        out[i, k, d] = s
+
+
+@njit(**_JIT)
 def structure_run(u, n_steps, h, a_u, a_y, a_yd, a_ydd, w, g_mat, d_mat, p_mat, c_mat, k_mat, m_inv,
-                  kinds, p_off, params, z_off, state, init_accel, y_out, yd_out, ydd_out, z_out, rtol, max_iter):
+                  kinds, p_off, params, z_off, state, init_accel, y_out, yd_out, ydd_out, z_out, rtol, max_iter,
+                  tangents, param_of, s_rows, s_kind, sens_out):
     """Integrate ``n_steps`` steps of length ``h`` from ``state`` (updated in
     place), laid out as ``[y (n), yd (n), ydd (n), z (nz), zd (nz)]``.
 
@@ -76,6 +124,14 @@ def structure_run(u, n_steps, h, a_u, a_y, a_yd, a_ydd, w, g_mat, d_mat, p_mat, 
     linear step's matrices (``y_lin = a_u u + a_y y + a_yd yd + a_ydd ydd``),
     ``w = K_eff^{-1} D``, ``g_mat = D^T w``; ``p_mat, c_mat, k_mat, m_inv``
     give the starting acceleration when ``init_accel``.
+
+    Sensitivities (none when ``tangents`` has no rows): each row of
+    ``tangents`` is the derivative of the state (same layout) along one
+    direction, updated in place; ``param_of[d]`` is the element parameter
+    (an index into ``params``) the direction moves, -1 for none (a
+    direction of the start state).  ``sens_out[i, k, d]`` receives sensor
+    ``k``'s derivative at sample ``i``: row ``s_rows[k]`` of the
+    displacement (``s_kind[k]`` 0), velocity (1) or acceleration (2).
 
     Returns
     -------
@@ -88,6 +144,8 @@ def structure_run(u, n_steps, h, a_u, a_y, a_yd, a_ydd, w, g_mat, d_mat, p_mat, 
     n_x = n_c + nz
     n_u = u.shape[0]
     n_out = y_out.shape[0]
+    n_dir = tangents.shape[0]
+    n_sens_out = sens_out.shape[0]
     c_acc = 4.0 / (h * h)
     c_vel = 2.0 / h
     half_h = 0.5 * h
@@ -120,6 +178,16 @@ def structure_run(u, n_steps, h, a_u, a_y, a_yd, a_ydd, w, g_mat, d_mat, p_mat, 
     res = np.zeros(n_x)
     peak = np.zeros(n_x)
     y_lin = np.zeros(n)
+    # the sensitivities' work arrays
+    dfdp = np.zeros(params.shape[0])
+    dgdp = np.zeros((nz, params.shape[0]))
+    pivots = np.zeros(n_x, dtype=np.int64)
+    x = np.zeros(n_x)
+    dy_lin = np.zeros(n)
+    d_rd_const = np.zeros(n_c)
+    d_force = np.zeros(n_c)
+    sr = np.zeros(n_c)
+    srd = np.zeros(n_c)
 
     _relative(d_mat, y, r)
     _relative(d_mat, yd, rd)
@@ -134,6 +202,41 @@ def structure_run(u, n_steps, h, a_u, a_y, a_yd, a_ydd, w, g_mat, d_mat, p_mat, 
             ydd[i] = 0.0
         _matvec_add(ydd, m_inv, load, 1.0)
         _state_rates(kinds, p_off, params, z_off, r, rd, z, zd, dgdy, dgdyd, dgdz)
+        if n_dir > 0:
+            # the start's acceleration and rates move with its positions
+            # and the parameters: the equation of motion differentiated
+            _parameter_partials(kinds, p_off, params, z_off, r, rd, z, dfdp, dgdp)
+            for d in range(n_dir):
+                tan = tangents[d]
+                pi = param_of[d]
+                _relative(d_mat, tan[0:n], sr)
+                _relative(d_mat, tan[n:2 * n], srd)
+                for c in range(n_c):
+                    df = dfdr[c] * sr[c] + dfdrd[c] * srd[c]
+                    for j in range(z_off[c], z_off[c + 1]):
+                        df += dfdz[j] * tan[3 * n + j]
+                    if pi >= 0 and p_off[c] <= pi < p_off[c + 1]:
+                        df += dfdp[pi]
+                    d_force[c] = df
+                load = np.zeros(n)
+                _matvec_add(load, c_mat, tan[n:2 * n], -1.0)
+                _matvec_add(load, k_mat, tan[0:n], -1.0)
+                _matvec_add(load, d_mat, d_force, -1.0)
+                for i in range(n):
+                    tan[2 * n + i] = 0.0
+                for i in range(n):
+                    acc = 0.0
+                    for j in range(n):
+                        acc += m_inv[i, j] * load[j]
+                    tan[2 * n + i] = acc
+                for j in range(nz):
+                    e = owner[j]
+                    rate = dgdy[j] * sr[e] + dgdyd[j] * srd[e]
+                    for col in range(z_off[e], z_off[e + 1]):
+                        rate += dgdz[j, col] * tan[3 * n + col]
+                    if pi >= 0:
+                        rate += dgdp[j, pi]
+                    tan[3 * n + nz + j] = rate
     for c in range(n_c):
         peak[c] = abs(r[c])
     for j in range(nz):
@@ -148,6 +251,10 @@ def structure_run(u, n_steps, h, a_u, a_y, a_yd, a_ydd, w, g_mat, d_mat, p_mat, 
                 ydd_out[i, j] = ydd[j]
             for j in range(nz):
                 z_out[i, j] = z[j]
+        if i < n_sens_out:
+            for d in range(n_dir):
+                tan = tangents[d]
+                _record_sensors(sens_out, i, s_rows, s_kind, tan[0:n], tan[n:2 * n], tan[2 * n:3 * n], d)
         if i == n_steps:
             break
         u1 = u[(i + 1) % n_u]
@@ -173,26 +280,16 @@ def structure_run(u, n_steps, h, a_u, a_y, a_yd, a_ydd, w, g_mat, d_mat, p_mat, 
                 rd[c] = c_vel * (r[c] - r_prev[c]) - rd_prev[c]
             _connection_forces(kinds, p_off, params, z_off, r, rd, zq, forces, dfdr, dfdrd, dfdz)
             _state_rates(kinds, p_off, params, z_off, r, rd, zq, g, dgdy, dgdyd, dgdz)
-            for a in range(n_x):
-                for b in range(n_x):
-                    jac[a, b] = 0.0
+            _newton_matrix(jac, g_mat, z_off, owner, dfdr, dfdrd, dfdz, dgdy, dgdyd, dgdz, c_vel, half_h)
             for c in range(n_c):
                 s = r[c] - r_lin[c]
                 for k in range(n_c):
                     s += g_mat[c, k] * forces[k]
-                    jac[c, k] = g_mat[c, k] * (dfdr[k] + dfdrd[k] * c_vel)
-                jac[c, c] += 1.0
-                for j in range(nz):
-                    jac[c, n_c + j] = g_mat[c, owner[j]] * dfdz[j]
                 res[c] = -s
             for j in range(nz):
-                e = owner[j]
                 res[n_c + j] = -(zq[j] - z[j] - half_h * (zd[j] + g[j]))
-                jac[n_c + j, e] = -half_h * (dgdy[j] + dgdyd[j] * c_vel)
-                for col in range(z_off[e], z_off[e + 1]):
-                    jac[n_c + j, n_c + col] = -half_h * dgdz[j, col]
-                jac[n_c + j, n_c + j] += 1.0
-            _solve_inplace(jac, res, n_x)
+            _factor_inplace(jac, pivots, n_x)
+            _solve_factored(jac, pivots, res, n_x)
             ok = True
             finite = True
             for a in range(n_x):
@@ -219,6 +316,66 @@ def structure_run(u, n_steps, h, a_u, a_y, a_yd, a_ydd, w, g_mat, d_mat, p_mat, 
         for c in range(n_c):
             rd[c] = c_vel * (r[c] - r_prev[c]) - rd_prev[c]
         _connection_forces(kinds, p_off, params, z_off, r, rd, zq, forces, dfdr, dfdrd, dfdz)
+        if n_dir > 0:
+            _state_rates(kinds, p_off, params, z_off, r, rd, zq, g, dgdy, dgdyd, dgdz)
+            _parameter_partials(kinds, p_off, params, z_off, r, rd, zq, dfdp, dgdp)
+            _newton_matrix(jac, g_mat, z_off, owner, dfdr, dfdrd, dfdz, dgdy, dgdyd, dgdz, c_vel, half_h)
+            _factor_inplace(jac, pivots, n_x)
+            for d in range(n_dir):
+                tan = tangents[d]
+                pi = param_of[d]
+                for j in range(n):
+                    dy_lin[j] = 0.0
+                _matvec_add(dy_lin, a_y, tan[0:n], 1.0)
+                _matvec_add(dy_lin, a_yd, tan[n:2 * n], 1.0)
+                _matvec_add(dy_lin, a_ydd, tan[2 * n:3 * n], 1.0)
+                _relative(d_mat, dy_lin, sr)
+                _relative(d_mat, tan[0:n], srd)  # the start's relative displacement
+                _relative(d_mat, tan[n:2 * n], d_rd_const)
+                for c in range(n_c):
+                    # rd = c_vel r + (-c_vel r_prev - rd_prev): its constant part moves
+                    d_rd_const[c] = -c_vel * srd[c] - d_rd_const[c]
+                for c in range(n_c):
+                    explicit = dfdrd[c] * d_rd_const[c]
+                    if pi >= 0 and p_off[c] <= pi < p_off[c + 1]:
+                        explicit += dfdp[pi]
+                    d_force[c] = explicit
+                for c in range(n_c):
+                    s_c = sr[c]
+                    for k in range(n_c):
+                        s_c -= g_mat[c, k] * d_force[k]
+                    x[c] = s_c
+                for j in range(nz):
+                    e = owner[j]
+                    v = tan[3 * n + j] + half_h * (tan[3 * n + nz + j] + dgdyd[j] * d_rd_const[e])
+                    if pi >= 0:
+                        v += half_h * dgdp[j, pi]
+                    x[n_c + j] = v
+                _solve_factored(jac, pivots, x, n_x)
+                # the forces' full change: through r, rd and the states
+                for c in range(n_c):
+                    df = d_force[c] + (dfdr[c] + dfdrd[c] * c_vel) * x[c]
+                    for j in range(z_off[c], z_off[c + 1]):
+                        df += dfdz[j] * x[n_c + j]
+                    d_force[c] = df
+                for j in range(n):
+                    dy1 = dy_lin[j]
+                    for c in range(n_c):
+                        dy1 -= w[j, c] * d_force[c]
+                    tan[2 * n + j] = c_acc * (dy1 - tan[j] - h * tan[n + j]) - tan[2 * n + j]
+                    tan[n + j] = c_vel * (dy1 - tan[j]) - tan[n + j]
+                    tan[j] = dy1
+                for j in range(nz):
+                    tan[3 * n + j] = x[n_c + j]
+                # the rates at the step's end move with (r, rd, z) there
+                for j in range(nz):
+                    e = owner[j]
+                    rate = dgdy[j] * x[e] + dgdyd[j] * (c_vel * x[e] + d_rd_const[e])
+                    for col in range(z_off[e], z_off[e + 1]):
+                        rate += dgdz[j, col] * x[n_c + col]
+                    if pi >= 0:
+                        rate += dgdp[j, pi]
+                    tan[3 * n + nz + j] = rate
         for j in range(n):
             s = y_lin[j]
             for c in range(n_c):

@@ -344,49 +344,31 @@ class Structure:
         -------
         StructureSimulation
         """
-        p_mat, n_in = self._input_matrix(inputs)
-        u = np.asarray(u_fine, dtype=np.float64)
-        u = u.reshape(-1, 1) if u.ndim == 1 else u
-        if u.ndim != 2 or u.shape[1] != n_in or u.shape[0] < 2:
-            raise ValueError(f"u_fine must have one column per input point ({n_in}) and at least 2 samples, "
-                             f"got shape {np.shape(u_fine)}.")
-        if not np.all(np.isfinite(u)):
-            raise ValueError("u_fine contains NaN or infinite values.")
-        u = np.ascontiguousarray(u)
-        fs = _positive_real("fs", fs)
-        h, n = 1.0 / fs, u.shape[0]
-        mats = self._step_matrices(h, p_mat)
-        n_dof, nz = self.n_dof, self.n_internal_states
-        state = np.zeros(3 * n_dof + 2 * nz)
-        if initial_state is not None:
-            initial_state = np.asarray(initial_state, dtype=np.float64)
-            if initial_state.shape != state.shape or not np.all(np.isfinite(initial_state)):
-                raise ValueError(f"initial_state must be a finite final_state of this structure "
-                                 f"(shape {state.shape}), got shape {initial_state.shape}.")
-            state = initial_state.copy()
-        m_inv = np.linalg.inv(self.mass)
+        u, h, p_mat, mats = self._prepared(u_fine, fs, inputs)
+        n, n_dof, nz = u.shape[0], self.n_dof, self.n_internal_states
+        state = self._start_state(initial_state)
 
         def run(state, init, n_steps):
-            y, yd, ydd = (np.empty((n, n_dof)) for _ in range(3))
-            z = np.empty((n, nz))
-            kinds, p_off, params, z_off, _ = self._packed
-            failed = structure_run(u, n_steps, h, mats["a_u"], mats["a_y"], mats["a_yd"], mats["a_ydd"], mats["w"],
-                                   mats["g_mat"], self._directions, p_mat, self.damping, self.stiffness, m_inv,
-                                   kinds, p_off, params, z_off, state, init, y, yd, ydd, z, _NEWTON_RTOL,
-                                   _NEWTON_MAX_ITER)
-            if not np.all(np.isfinite(state)):
-                raise FloatingPointError("the simulation diverged (non-finite state).")
-            return y, yd, ydd, z, failed
+            out = self._integrate(u, h, p_mat, mats, state, init, n_steps, n)
+            return out[:5]
 
         if not periodic:
             y, yd, ydd, z, failed = run(state, True, n - 1)
-            return StructureSimulation(y, yd, ydd, z, fs, 1, failed, state)
+            return StructureSimulation(y, yd, ydd, z, 1.0 / h, 1, failed, state)
         if isinstance(max_periods, bool) or not isinstance(max_periods, Integral) or max_periods < 1:
             raise ValueError(f"max_periods must be a positive int, got {max_periods!r}.")
         idx = self._positions()
-        linear_map = self._linear_period_map(mats, h, n) if nz == 0 else None
-        shooter = PeriodShooter(lambda st, ini: run(st, ini, n)[:2], state.size, nz,
-                                None if linear_map is None else (lambda st, i: linear_map), positions=idx)
+
+        def period_jacobian(start, idx):
+            # the positions' derivatives over a period, from the integrator's
+            # sensitivities along each start position (its acceleration and
+            # rates recomputed, as a shot starts)
+            tangents = np.zeros((idx.size, start.size))
+            tangents[np.arange(idx.size), idx] = 1.0
+            self._integrate(u, h, p_mat, mats, start.copy(), True, n, 0, tangents, np.full(idx.size, -1), [])
+            return tangents[:, idx].T
+
+        shooter = PeriodShooter(lambda st, ini: run(st, ini, n)[:2], state.size, nz, period_jacobian, positions=idx)
         init, period, total_failed, converged, plain = True, 0, 0, False, []
         while period < max_periods:
             start = state.copy()
@@ -402,8 +384,7 @@ class Structure:
                 plain.append(change)
                 if _futile(plain, tol, max_periods - period):
                     break
-            # a linear structure's period map is known: shoot at once
-            if (period >= _SHOOT_AFTER or linear_map is not None) and period < max_periods:
+            if period >= _SHOOT_AFTER and period < max_periods:
                 shot, used = shooter.step(start, state, traces, max_periods - period - 1)
                 period += used
                 if shot is not None:
@@ -411,29 +392,111 @@ class Structure:
         if not converged and warn:
             warnings.warn(f"periodic steady state not reached within max_periods={max_periods} periods "
                           f"(tolerance {tol:g}); the last period is returned.", ConvergenceWarning, stacklevel=2)
-        return StructureSimulation(y, yd, ydd, z, fs, period, total_failed, state)
+        return StructureSimulation(y, yd, ydd, z, 1.0 / h, period, total_failed, state)
 
-    def _linear_period_map(self, mats, h, n_steps):
-        """The derivatives of the positions ``(q, qd)`` after ``n_steps``
-        steps by those at the start (the acceleration set by the equation
-        of motion), for the structure without its connections: the step's
-        matrix raised to the period by squaring."""
-        n = self.n_dof
-        c_acc, c_vel = 4.0 / h**2, 2.0 / h
-        eye = np.eye(n)
-        a_y, a_yd, a_ydd = mats["a_y"], mats["a_yd"], mats["a_ydd"]
-        step = np.block([[a_y, a_yd, a_ydd],
-                         [c_vel * (a_y - eye), c_vel * a_yd - eye, c_vel * a_ydd],
-                         [c_acc * (a_y - eye), c_acc * (a_yd - h * eye), c_acc * a_ydd - eye]])
-        power, base, k = np.eye(3 * n), step, int(n_steps)
-        while k:
-            if k & 1:
-                power = base @ power
-            base = base @ base
-            k >>= 1
-        m_inv = np.linalg.inv(self.mass)
-        lift = np.vstack([np.eye(2 * n), np.hstack([-m_inv @ self.stiffness, -m_inv @ self.damping])])
-        return power[:2 * n] @ lift
+    def _prepared(self, u_fine, fs, inputs):
+        """The input as rows of forces, the step length, the input matrix
+        and the linear step's matrices."""
+        p_mat, n_in = self._input_matrix(inputs)
+        u = np.asarray(u_fine, dtype=np.float64)
+        u = u.reshape(-1, 1) if u.ndim == 1 else u
+        if u.ndim != 2 or u.shape[1] != n_in or u.shape[0] < 2:
+            raise ValueError(f"u_fine must have one column per input point ({n_in}) and at least 2 samples, "
+                             f"got shape {np.shape(u_fine)}.")
+        if not np.all(np.isfinite(u)):
+            raise ValueError("u_fine contains NaN or infinite values.")
+        h = 1.0 / _positive_real("fs", fs)
+        return np.ascontiguousarray(u), h, p_mat, self._step_matrices(h, p_mat)
+
+    def _start_state(self, initial_state):
+        state = np.zeros(3 * self.n_dof + 2 * self.n_internal_states)
+        if initial_state is None:
+            return state
+        initial_state = np.asarray(initial_state, dtype=np.float64)
+        if initial_state.shape != state.shape or not np.all(np.isfinite(initial_state)):
+            raise ValueError(f"initial_state must be a finite final_state of this structure "
+                             f"(shape {state.shape}), got shape {initial_state.shape}.")
+        return initial_state.copy()
+
+    def _integrate(self, u, h, p_mat, mats, state, init, n_steps, n_out, tangents=None, param_of=None,
+                   sensors=None):
+        """One run of the kernel; with ``tangents``, also the sensors'
+        derivatives along them."""
+        n_dof, nz = self.n_dof, self.n_internal_states
+        y, yd, ydd = (np.empty((n_out, n_dof)) for _ in range(3))
+        z = np.empty((n_out, nz))
+        kinds, p_off, params, z_off, _ = self._packed
+        if tangents is None:
+            tangents, param_of = np.zeros((0, state.size)), np.zeros(0, dtype=np.int64)
+            rows, kind, sens = np.zeros((0, n_dof)), np.zeros(0, dtype=np.int64), np.zeros((0, 0, 0))
+        else:
+            rows, kind = self._sensor_rows(sensors)
+            sens = np.empty((n_out, rows.shape[0], tangents.shape[0]))
+        failed = structure_run(u, n_steps, h, mats["a_u"], mats["a_y"], mats["a_yd"], mats["a_ydd"], mats["w"],
+                               mats["g_mat"], self._directions, p_mat, self.damping, self.stiffness,
+                               np.linalg.inv(self.mass), kinds, p_off, params, z_off, state, init, y, yd, ydd, z,
+                               _NEWTON_RTOL, _NEWTON_MAX_ITER, tangents, param_of.astype(np.int64),
+                               np.ascontiguousarray(rows), kind.astype(np.int64), sens)
+        if not (np.all(np.isfinite(state)) and np.all(np.isfinite(tangents))):
+            raise FloatingPointError("the simulation diverged (non-finite state).")
+        return y, yd, ydd, z, failed, sens
+
+    @property
+    def parameter_vector(self):
+        """The connections' elements' parameters, in the order of
+        ``connections`` (each element's ``param_names``): what
+        :meth:`sensitivity` differentiates by."""
+        return self._packed[2].copy()
+
+    def sensitivity(self, u_fine, *, fs, inputs, sensors, periodic=False, steady_state=None):
+        """The sensors' records and their exact derivatives by
+        :attr:`parameter_vector`.
+
+        The derivatives are those of the integration scheme itself (each
+        converged step's equations differentiated, one run for all
+        parameters). A periodic steady state moves with the parameters too:
+        the period is run once more with the start state's directions, and
+        the orbit's own derivative solved from the period map.
+
+        Parameters
+        ----------
+        u_fine : array-like of shape (n_samples,) or (n_samples, n_inputs)
+        fs : float
+            Integration rate, Hz.
+        inputs : str or sequence of str
+        sensors : sequence of (str, str)
+        periodic : bool, default=False
+            True: ``u_fine`` is one period and ``steady_state`` the
+            ``final_state`` of a periodic :meth:`simulate_fine` of it.
+        steady_state : ndarray, default=None
+
+        Returns
+        -------
+        records : ndarray of shape (n_samples, n_sensors)
+        derivatives : ndarray of shape (n_samples, n_sensors, n_parameters)
+        """
+        u, h, p_mat, mats = self._prepared(u_fine, fs, inputs)
+        n, n_params = u.shape[0], self._packed[2].size
+        state = self._start_state(None)
+        if not periodic:
+            tangents = np.zeros((n_params, state.size))
+            y, yd, ydd, z, _, sens = self._integrate(u, h, p_mat, mats, state, True, n - 1, n, tangents,
+                                                     np.arange(n_params), sensors)
+            return self.measure(StructureSimulation(y, yd, ydd, z, 1 / h, 1, 0, state), sensors), sens
+        if steady_state is None:
+            raise ValueError("a periodic sensitivity needs the steady_state of a converged periodic simulate_fine.")
+        state = self._start_state(steady_state)
+        n_state = state.size
+        # directions: each of the start state's (the period map), then each
+        # parameter's from the same start
+        tangents = np.zeros((n_state + n_params, n_state))
+        tangents[:n_state] = np.eye(n_state)
+        param_of = np.r_[np.full(n_state, -1), np.arange(n_params)]
+        y, yd, ydd, z, _, sens = self._integrate(u, h, p_mat, mats, state, False, n, n, tangents, param_of, sensors)
+        phi, b = tangents[:n_state].T, tangents[n_state:].T
+        start = np.linalg.solve(np.eye(n_state) - phi, b)
+        records = self.measure(StructureSimulation(y, yd, ydd, z, 1 / h, 1, 0, state), sensors)
+        return records, sens[:, :, n_state:] + sens[:, :, :n_state] @ start
 
     def simulate(self, u, *, fs, inputs, sensors, periodic=False, oversampling=5, decimation=(5,)):
         """The sensors' records at the data rate.
