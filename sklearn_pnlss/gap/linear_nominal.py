@@ -3,34 +3,16 @@ builds from the best linear approximation (mass, damping and stiffness from
 the resonance, its width and the static gain)."""
 import numpy as np
 
-from ..frequency.bla import welch_bla
 from ..physics.oscillator import Oscillator
-from ..utils.validation import as_signal_list, check_period, is_periodic
+from ..utils.validation import as_signal_list, check_period
+from .readings import measured_frf
 
 __all__ = ["linear_nominal"]
 
-#: Segment length of the Welch estimate for data without a period.
-WELCH_SEGMENT = 4096
 #: Longest channel delay looked for when the FRF is no oscillator's, samples.
 MAX_DELAY_SAMPLES = 10
 #: Rms relative FRF error under which an oscillator read through a delay is taken.
 DELAYED_FIT_TOL = 0.1
-
-
-def _frf(u_list, y_list, period):
-    """Lines (cycles per record) and FRF of the data: the period-averaged
-    spectra of steady-state signals, pooled over them (H1), or Welch's H1."""
-    periodic = period is not None and all(is_periodic(u.size, period) for u in u_list)
-    if not periodic:
-        n = min(WELCH_SEGMENT, 2 ** int(np.log2(min(u.size for u in u_list))))
-        lines, frf, _ = welch_bla([u[:, None] for u in u_list], [y[:, None] for y in y_list], n)
-        return lines, frf[:, 0, 0], n
-    U = np.array([np.fft.rfft(u.reshape(-1, period).mean(0)) for u in u_list])
-    Y = np.array([np.fft.rfft(y.reshape(-1, period).mean(0)) for y in y_list])
-    power = np.sum(np.abs(U) ** 2, axis=0)
-    lines = np.flatnonzero(power > 1e-6 * power.max())
-    lines = lines[lines > 0]
-    return lines, np.sum(Y[:, lines] * U[:, lines].conj(), 0) / power[lines], period
 
 
 def linear_nominal(X, y, *, fs, period=None, f_band=None):
@@ -81,7 +63,8 @@ def linear_nominal(X, y, *, fs, period=None, f_band=None):
     y_list = [s[:, 0] for s in as_signal_list(y, name="y", min_samples=16)[0]]
     if len(u_list) != len(y_list) or any(u.size != v.size for u, v in zip(u_list, y_list)):
         raise ValueError("X and y must hold the same number of signals of the same lengths.")
-    lines, G, n = _frf(u_list, y_list, period)
+    lines, G, n = measured_frf(u_list, [y[:, None] for y in y_list], period)
+    G = G[:, 0]
     w = 2 * np.pi * lines * fs / n
     if f_band is not None:
         keep = (w >= 2 * np.pi * f_band[0]) & (w <= 2 * np.pi * f_band[1])

@@ -14,15 +14,13 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..frequency.bla import welch_bla
 from ..physics.structure import SENSOR_KINDS, Structure
 from ..statespace.subspace import fd_subspace
-from ..utils.validation import as_signal_list, check_period, is_periodic
+from ..utils.validation import as_signal_list, check_period
+from .readings import measured_frf
 
 __all__ = ["ModalFit", "fit_modes", "modal_nominal"]
 
-#: Segment length of the Welch estimate for data without a period.
-WELCH_SEGMENT = 4096
 #: How far outside the fitted band a mode may sit (factors of its edges).
 BAND_MARGIN = (0.8, 1.25)
 #: Evaluations of the poles' least squares (a fit that needs more is
@@ -189,23 +187,6 @@ def _start(w, G, n_modes, fs):
     return np.abs(found), -found.real / np.abs(found)
 
 
-def _frf(u_list, y_list, period):
-    """Lines (cycles per record), FRF (n_lines, n_outputs) and record
-    length: the period-averaged spectra of steady-state signals, pooled
-    (H1), else Welch's H1."""
-    if period is not None and all(is_periodic(u.size, period) for u in u_list):
-        U = np.array([np.fft.rfft(u.reshape(-1, period).mean(0)) for u in u_list])
-        Y = np.array([np.fft.rfft(y.reshape(-1, period, y.shape[1]).mean(0), axis=0) for y in y_list])
-        power = np.sum(np.abs(U) ** 2, axis=0)
-        lines = np.flatnonzero(power > 1e-6 * power.max())
-        lines = lines[lines > 0]
-        frf = np.einsum("sk,skp->kp", U[:, lines].conj(), Y[:, lines]) / power[lines, None]
-        return lines, frf, period
-    n = min(WELCH_SEGMENT, 2 ** int(np.log2(min(u.size for u in u_list))))
-    lines, frf, _ = welch_bla([u[:, None] for u in u_list], y_list, n)
-    return lines, frf[:, :, 0], n
-
-
 def _unresolved(fit, drive, driving_point, band):
     """Why a fit's modes are not a structure's (None when they are): a mode
     outside the fitted band (it fits the band's edge, the residual modes'
@@ -297,7 +278,7 @@ def modal_nominal(X, y, *, fs, points, driving_point, n_modes="auto", kind="acce
         raise ValueError(f"y must have one column per point ({len(points)}), got {y_list[0].shape[1]}.")
     if driving_point not in points:
         raise ValueError(f"driving_point must be one of the sensors' points {points}, got {driving_point!r}.")
-    lines, G, n = _frf(u_list, y_list, period)
+    lines, G, n = measured_frf(u_list, y_list, period)
     freqs = lines * fs / n
     if f_band is not None:
         keep = (freqs >= f_band[0]) & (freqs <= f_band[1])

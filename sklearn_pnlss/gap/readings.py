@@ -1,10 +1,52 @@
 """Readings of measured signals by themselves, shared by the candidates'
-clues, the where-analysis and the verdict: derivatives of a displacement,
-the input's frequency content, the force the nominal leaves unbalanced
-along the measured motion, and the misfit of a simulation."""
+clues, the where-analysis, the verdict and the nominals read off data:
+derivatives of a displacement, the input's frequency content, the measured
+frequency response, the force the nominal leaves unbalanced along the
+measured motion, and the misfit of a simulation."""
 import numpy as np
 
-__all__ = ["signal_derivative", "content_limit", "missing_force", "periods_of", "misfit"]
+from ..frequency.bla import welch_bla
+from ..utils.validation import is_periodic
+
+__all__ = ["signal_derivative", "content_limit", "measured_frf", "missing_force", "periods_of", "misfit"]
+
+#: Segment length of the Welch estimate of data without a period.
+WELCH_SEGMENT = 4096
+
+
+def measured_frf(u_list, y_list, period):
+    """The frequency response from one force to every output of the data.
+
+    Steady-state periodic signals (each a whole number of ``period``
+    samples): the period-averaged spectra, pooled over the signals (H1);
+    otherwise Welch's H1 in segments of ``WELCH_SEGMENT`` samples (fewer
+    for short records).
+
+    Parameters
+    ----------
+    u_list : list of ndarray (n_samples_i,)
+    y_list : list of ndarray (n_samples_i, n_outputs)
+    period : int or None
+
+    Returns
+    -------
+    lines : ndarray of int
+        Excited DFT lines (cycles per record of ``n`` samples).
+    frf : ndarray (n_lines, n_outputs), complex
+    n : int
+        Samples per record the lines count in.
+    """
+    if period is not None and all(is_periodic(u.size, period) for u in u_list):
+        U = np.array([np.fft.rfft(u.reshape(-1, period).mean(0)) for u in u_list])
+        Y = np.array([np.fft.rfft(y.reshape(-1, period, y.shape[1]).mean(0), axis=0) for y in y_list])
+        power = np.sum(np.abs(U) ** 2, axis=0)
+        lines = np.flatnonzero(power > 1e-6 * power.max())
+        lines = lines[lines > 0]
+        frf = np.sum(Y[:, lines] * U[:, lines, None].conj(), axis=0) / power[lines, None]
+        return lines, frf, period
+    n = min(WELCH_SEGMENT, 2 ** int(np.log2(min(u.size for u in u_list))))
+    lines, frf, _ = welch_bla([u[:, None] for u in u_list], y_list, n)
+    return lines, frf[:, :, 0], n
 
 
 def _band_limit(n, fs, f_max):
