@@ -493,11 +493,11 @@ TANKS_PNLSS = ("cascaded_tanks", "PNLSS")
 FIELD_FIGURES = [
     Figure(R, "A diagnosis takes 20 to 30 s at the median on 2 cores", "gap_withheld.py --family e, a, b, c, d",
            lambda: [min(_family(f)[3] for f in "eabcd"), max(_family(f)[3] for f in "eabcd"), 2], slack=0.5),
-    Figure(R, "| WH2009 | `BLAEstimator(6)` | 71.75 mV | 0.2 s | |", FIELD,
+    Figure(R, "| WH2009 | `BLAEstimator(6)` | 57.42 mV | 2.6 s | |", FIELD,
            lambda: [_field("wh2009", "BLA")["settings"]["n_states"], _field("wh2009", "BLA")["test_rmse"],
                     _field("wh2009", "BLA")["fit_s"]]),
     Figure(R, "| WH2009 | `PNLSSRegressor(6, degrees=(2, 3))`, states and input, both equations, 400 iterations, "
-              "`n_jobs=2` | 0.436 mV | 779 s | PNLSS 0.42 mV, best 0.241 mV |", FIELD,
+              "`n_jobs=2` | 0.536 mV | 774 s | PNLSS 0.42 mV, best 0.241 mV |", FIELD,
            lambda: [6, *_field("wh2009", "PNLSS")["settings"]["degrees"],
                     _field("wh2009", "PNLSS")["settings"]["max_iter"], _field("wh2009", "PNLSS")["settings"]["n_jobs"],
                     _field("wh2009", "PNLSS")["test_rmse"],
@@ -518,17 +518,20 @@ FIELD_FIGURES = [
     Figure(PN, "``PNLSSRegressor(6, degrees=(2, 3), n_jobs=2)``", FIELD,
            lambda: [6, *_field("wh2009", "PNLSS")["settings"]["degrees"], _field("wh2009", "PNLSS")["settings"]["n_jobs"]]),
     Figure(PN, "400 iterations (the record cut in two for the threads, each half started from the state its first "
-               "samples show): 0.436 mV on the test record in 779 s on 2 cores, 4 % behind the published PNLSS "
+               "samples show): 0.536 mV on the test record in 774 s on 2 cores, 28 % behind the published PNLSS "
                "model's 0.42 mV, well behind the best published 0.241 mV", FIELD,
            lambda: [_field("wh2009", "PNLSS")["settings"]["max_iter"], _field("wh2009", "PNLSS")["test_rmse"],
                     _field("wh2009", "PNLSS")["fit_s"], _results("field")["environment"]["cpu_count"],
                     100 * (_field("wh2009", "PNLSS")["test_rmse"] / 0.42 - 1), 0.42, 0.241]),
-    Figure(PN, "Its cost still falls by 0.19 dB over the last 100 iterations (Levenberg-Marquardt's long tail on "
+    Figure(PN, "its cost still falls by 0.90 dB over the last 100 iterations (Levenberg-Marquardt's long tail on "
                "833 parameters)", FIELD,
            lambda: [_field("wh2009", "PNLSS")["cost_db_every_50"][-3] - _field("wh2009", "PNLSS")["cost_db_every_50"][-1],
                     100, _field("wh2009", "PNLSS")["n_params"]]),
-    Figure(PN, "lands on 71.75 mV at the default segment length where the published BLA is about 56 mV", FIELD,
-           lambda: [_field("wh2009", "BLA")["test_rmse"], 56], slack=0.5),
+    Figure(PN, "chosen by the simulation error on the record (57.42 mV, the published BLA about 56 mV), where it "
+               "used to be chosen by the FRF misfit in Welch's variance (71.75 mV), and from that worse start the same "
+               "400 iterations had reached 0.436 mV", "bench_field.py: field.json (before: the run on 834abc3)",
+           lambda: [_field("wh2009", "BLA")["test_rmse"], 56, 71.75, _field("wh2009", "PNLSS")["settings"]["max_iter"],
+                    0.436], slack=0.005),
     Figure(PN, "0.316 V, ahead of the published PNLSS model (0.45 V), behind the grey box (0.191 V)", FIELD,
            lambda: [_field(*TANKS_PNLSS)["test_rmse"], 0.45, 0.191]),
     Figure(PN, "the 1024 training samples", "load_benchmark('cascaded_tanks'), tests/test_field_benchmarks.py",
