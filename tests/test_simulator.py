@@ -539,11 +539,37 @@ def test_scalar_loops_equal_the_general_loop_to_the_bit(name):
         np.testing.assert_array_equal(fast, general)
 
 
+def _joint_elimination(a, b, n):
+    """Gaussian elimination with partial pivoting of the matrix and the
+    right-hand side together (the integrator's solve before it factored
+    once per step); the solution overwrites b."""
+    for col in range(n):
+        piv = col
+        best = abs(a[col, col])
+        for r in range(col + 1, n):
+            if abs(a[r, col]) > best:
+                best, piv = abs(a[r, col]), r
+        if piv != col:
+            a[[col, piv]] = a[[piv, col]]
+            b[col], b[piv] = b[piv], b[col]
+        for r in range(col + 1, n):
+            f = a[r, col] / a[col, col]
+            if f != 0.0:
+                for j in range(col, n):
+                    a[r, j] -= f * a[col, j]
+                b[r] -= f * b[col]
+    for r in range(n - 1, -1, -1):
+        s = b[r]
+        for j in range(r + 1, n):
+            s -= a[r, j] * b[j]
+        b[r] = s / a[r, r]
+
+
 def test_a_factored_matrix_solves_as_the_full_elimination():
-    """The sensitivities' one factorisation per step, replayed per
-    direction, and the scalar 3 x 3 solve give the full elimination's
-    numbers to the bit, pivoting included."""
-    from sklearn_pnlss.physics._newmark import _factor_inplace, _solve3, _solve_factored, _solve_inplace
+    """The integrator's one factorisation per step, replayed per right-hand
+    side, and the scalar 3 x 3 solve give the joint elimination's numbers to
+    the bit, pivoting included."""
+    from sklearn_pnlss.physics._newmark import _factor_inplace, _solve3, _solve_factored
 
     rng = np.random.default_rng(0)
     for trial in range(300):
@@ -553,7 +579,7 @@ def test_a_factored_matrix_solves_as_the_full_elimination():
             a[1:, 0] = 0.0  # zero multipliers are skipped
         b = rng.standard_normal(n)
         expected = b.copy()
-        _solve_inplace.py_func(a.copy(), expected, n)
+        _joint_elimination(a.copy(), expected, n)
         factored, pivots = a.copy(), np.zeros(n, dtype=np.int64)
         _factor_inplace.py_func(factored, pivots, n)
         got = b.copy()

@@ -346,46 +346,14 @@ def integrator_kernels(functions=()):
 # Helpers
 # --------------------------------------------------------------------------
 @njit(**_INLINE)
-def _solve_inplace(a, b, n):
-    """Solve a x = b (n x n, partial pivoting); the solution overwrites b."""
-    for col in range(n):
-        piv = col
-        best = abs(a[col, col])
-        for r in range(col + 1, n):
-            v = abs(a[r, col])
-            if v > best:
-                best = v
-                piv = r
-        if piv != col:
-            for j in range(n):
-                tmp = a[col, j]
-                a[col, j] = a[piv, j]
-                a[piv, j] = tmp
-            tmp = b[col]
-            b[col] = b[piv]
-            b[piv] = tmp
-        d = a[col, col]
-        for r in range(col + 1, n):
-            f = a[r, col] / d
-            if f != 0.0:
-                for j in range(col, n):
-                    a[r, j] -= f * a[col, j]
-                b[r] -= f * b[col]
-    for r in range(n - 1, -1, -1):
-        s = b[r]
-        for j in range(r + 1, n):
-            s -= a[r, j] * b[j]
-        b[r] = s / a[r, r]
-
-
-@njit(**_INLINE)
 def _factor_inplace(a, pivots, n):
-    """The elimination of ``_solve_inplace`` done once on the matrix: ``a``
-    becomes its upper triangle with the multipliers below it, ``pivots[col]``
-    the row swapped into ``col``.  ``_solve_factored`` then repeats on a
-    right-hand side exactly the operations ``_solve_inplace`` would (the
-    same numbers to the bit), without eliminating the matrix again: the
-    sensitivities solve one matrix for many directions per step."""
+    """Gaussian elimination with partial pivoting of ``a`` (n x n), done
+    once: ``a`` becomes its upper triangle with the multipliers below it,
+    ``pivots[col]`` the row swapped into ``col``.  ``_solve_factored`` then
+    repeats on a right-hand side exactly the operations a joint elimination
+    of matrix and right-hand side would (the same numbers to the bit),
+    without eliminating the matrix again: the sensitivities solve one
+    matrix for many directions per step."""
     for col in range(n):
         piv = col
         best = abs(a[col, col])
@@ -435,8 +403,8 @@ def _solve_factored(a, pivots, b, n):
 
 @njit(**_INLINE)
 def _solve3(a00, a01, a02, a10, a11, a12, a20, a21, a22, b0, b1, b2):
-    """``_solve_inplace`` for n = 3 on scalars, the same operations in the
-    same order; returns the solution."""
+    """``_factor_inplace`` and ``_solve_factored`` for n = 3 on scalars, the
+    same operations in the same order; returns the solution."""
     if abs(a10) > abs(a00) and abs(a10) >= abs(a20):
         a00, a01, a02, b0, a10, a11, a12, b1 = a10, a11, a12, b1, a00, a01, a02, b0
     elif abs(a20) > abs(a00) and abs(a20) > abs(a10):
@@ -465,8 +433,8 @@ def _solve3(a00, a01, a02, a10, a11, a12, a20, a21, a22, b0, b1, b2):
 
 @njit(**_INLINE)
 def _solve2_inplace(a, b):
-    """``_solve_inplace`` for n = 2 (one internal state), the same
-    operations in the same order, unrolled."""
+    """``_factor_inplace`` and ``_solve_factored`` for n = 2 (one internal
+    state), the same operations in the same order, unrolled."""
     if abs(a[1, 0]) > abs(a[0, 0]):
         a00, a01, b0, a10, a11, b1 = a[1, 0], a[1, 1], b[1], a[0, 0], a[0, 1], b[0]
     else:
@@ -1002,7 +970,8 @@ def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
             elif n == 2:
                 _solve2_inplace(jac, res)
             else:
-                _solve_inplace(jac, res, n)
+                _factor_inplace(jac, pivots, n)
+                _solve_factored(jac, pivots, res, n)
             ok = True
             finite = True
             for j in range(n):
