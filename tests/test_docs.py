@@ -491,7 +491,7 @@ def _grid_best_within_60():
 FIELD = "bench_field.py: field.json"
 TANKS_PNLSS = ("cascaded_tanks", "PNLSS")
 FIELD_FIGURES = [
-    Figure(R, "A diagnosis takes 20 to 30 s at the median on 2 cores", "gap_withheld.py --family e, a, b, c, d",
+    Figure(R, "A diagnosis takes 20 to 27 s at the median on 2 cores", "gap_withheld.py --family e, a, b, c, d",
            lambda: [min(_family(f)[3] for f in "eabcd"), max(_family(f)[3] for f in "eabcd"), 2], slack=0.5),
     Figure(R, "| WH2009 | `BLAEstimator(6)` | 57.42 mV | 2.6 s | |", FIELD,
            lambda: [_field("wh2009", "BLA")["settings"]["n_states"], _field("wh2009", "BLA")["test_rmse"],
@@ -808,8 +808,7 @@ FIGURES = [
                 "(``--strengths 2``, 52 cases): the right effect in 44 of 44 effect cases, the stiff backlash "
                 "included (closing 100.0 % under a nominal 13-20 % off), a channel delay under the nominal's errors "
                 "named ``recalibration`` with the delay, ``recalibration`` without an effect, ``\"unexplained\"`` in "
-                "6 of 6 removed cases, 30 s per diagnosis (median; 93 s before this code's speed-ups; measured while "
-                "other work shared the cores for the first half of the run, so an upper bound), 99 s at most",
+                "6 of 6 removed cases, 21 s per diagnosis (median; 93 s before this code's speed-ups), 100 s at most",
            "gap_withheld.py --family b (before: the run on 249ef31)",
            lambda: [10 * _source_of("benchmarks/gap_withheld.py", "rng.uniform(0.1, 0.3, 3)"), 30, 2,
                     len(_results("gap_withheld_family_b")["rows"]), *_family("b")[:2],
@@ -863,7 +862,7 @@ FIGURES = [
                     0.5e3 / 750, 1e3 / 750, 1.5e3 / 750], slack=0.01),
     Figure(GAP, "Left out, the second seed's stiff backlash closed 99.998 % of the achievable in families a, b "
                 "and e; on the present code it closes 96.9 % in family a, 95.5 % in family b and 97.4 % in family e "
-                "(24 s, 45 s and 22 s; 346 s in family b before)",
+                "(24 s, 24 s and 22 s; 346 s in family b before)",
            "gap_withheld.py --family a, b, e (backlash, seed 101; before: the rows on 38bbb02 and the earlier runs)",
            lambda: [99.998, *[100 * _case(f, "backlash", 101)["closure_vs_achievable"] for f in "abe"],
                     *[_case(f, "backlash", 101)["seconds"] for f in "abe"], 346],
