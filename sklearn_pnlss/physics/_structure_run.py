@@ -224,11 +224,7 @@ def structure_run(u, n_steps, h, a_u, a_y, a_yd, a_ydd, w, g_mat, d_mat, p_mat, 
                 _matvec_add(load, d_mat, d_force, -1.0)
                 for i in range(n):
                     tan[2 * n + i] = 0.0
-                for i in range(n):
-                    acc = 0.0
-                    for j in range(n):
-                        acc += m_inv[i, j] * load[j]
-                    tan[2 * n + i] = acc
+                _matvec_add(tan[2 * n:3 * n], m_inv, load, 1.0)
                 for j in range(nz):
                     e = owner[j]
                     rate = dgdy[j] * sr[e] + dgdyd[j] * srd[e]

@@ -303,15 +303,17 @@ class Structure:
         return np.stack([motion[k] @ row for row, k in zip(rows, powers)], axis=1)
 
     def _step_matrices(self, h, p_mat):
-        """The linear step's matrices for step length ``h`` (see
-        :func:`~sklearn_pnlss.physics._structure_run.structure_run`)."""
+        """The linear step's matrices for step length ``h``, and the inverse
+        mass a start's acceleration is solved with (see
+        :func:`~sklearn_pnlss.physics._structure_run.structure_run`); made
+        once per simulation, not per period."""
         c_acc, c_vel = 4.0 / h**2, 2.0 / h
         m, c, k, d = self.mass, self.damping, self.stiffness, self._directions
         k_eff = c_acc * m + c_vel * c + k
         solve = lambda b: np.linalg.solve(k_eff, b)  # noqa: E731
         w = solve(d)
         return dict(a_u=solve(p_mat), a_y=solve(c_acc * m + c_vel * c), a_yd=solve(c_acc * h * m + c),
-                    a_ydd=solve(m), w=w, g_mat=d.T @ w)
+                    a_ydd=solve(m), w=w, g_mat=d.T @ w, m_inv=np.linalg.inv(m))
 
     def _positions(self):
         n, nz = self.n_dof, self.n_internal_states
@@ -434,7 +436,7 @@ class Structure:
             sens = np.empty((n_out, rows.shape[0], tangents.shape[0]))
         failed = structure_run(u, n_steps, h, mats["a_u"], mats["a_y"], mats["a_yd"], mats["a_ydd"], mats["w"],
                                mats["g_mat"], self._directions, p_mat, self.damping, self.stiffness,
-                               np.linalg.inv(self.mass), kinds, p_off, params, z_off, state, init, y, yd, ydd, z,
+                               mats["m_inv"], kinds, p_off, params, z_off, state, init, y, yd, ydd, z,
                                _NEWTON_RTOL, _NEWTON_MAX_ITER, tangents, param_of.astype(np.int64),
                                np.ascontiguousarray(rows), kind.astype(np.int64), sens)
         if not (np.all(np.isfinite(state)) and np.all(np.isfinite(tangents))):
