@@ -1,0 +1,7 @@
+"""Where in a structure the simulator is wrong: connections between sensed
+points, fitted to the nominal's error (see :class:`ConnectionLocator`)."""
+from .laws import LAW_NAMES, ForceLaw, force_laws
+from .locator import ConnectionCandidate, ConnectionLocator
+from .spectra import PeriodSpectra
+
+__all__ = ["ConnectionLocator", "ConnectionCandidate", "ForceLaw", "force_laws", "LAW_NAMES", "PeriodSpectra"]

@@ -1,0 +1,121 @@
+"""The force laws a connection is tried with, each linear in its parameters.
+
+A law is a stiffness and a damping change at the connection (the linear
+part, which a nominal read at another level always needs) plus at most one
+nonlinear element of the library with a unit coefficient: its force on the
+measured relative motion is one regressor, and the fitted coefficient is the
+element's physical parameter.  The force is the integrator's own
+(:meth:`~sklearn_pnlss.physics.Oscillator.restoring_force` of the element),
+smoothing included, so a law read here simulates as fitted.
+
+A clearance enters nonlinearly; it is profiled over ``BACKLASH_GAPS``
+(multiples of the relative displacement's rms), each gap one law.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...physics.forces import (CoulombFriction, CubicStiffness, DeadZoneSpring, QuadraticDamping,
+                               QuadraticStiffness)
+from ...physics.oscillator import Oscillator
+
+__all__ = ["ForceLaw", "force_laws", "LAW_NAMES"]
+
+#: The laws tried by default: names shared with the single-mass effects.
+LAW_NAMES = ("linear", "cubic_stiffness", "quadratic_stiffness", "coulomb_friction", "quadratic_damping",
+             "backlash")
+#: Clearances a backlash is profiled over, in rms relative displacements:
+#: from a clearance that most of the motion crosses to one only its peaks
+#: reach (a multisine's peaks sit near three rms).
+BACKLASH_GAPS = (0.25, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0)
+#: Coulomb friction is smoothed over this share of the rms relative velocity
+#: (as the single-mass effect is): a sign function at the velocities that
+#: carry the response, smooth for Newton's method.
+FRICTION_SMOOTHING = 0.01
+
+
+@dataclass(frozen=True)
+class ForceLaw:
+    """A connection's force law, linear in its coefficients.
+
+    Attributes
+    ----------
+    name : str
+        The law's name (one of :data:`LAW_NAMES`).
+    element : ForceElement or None
+        The nonlinear element with a unit coefficient (None: linear only).
+    coefficient : str or None
+        The element's parameter the coefficient is.
+    fixed : dict
+        The element's parameters that are not fitted (a clearance, a
+        smoothing), physical units.
+    """
+
+    name: str
+    element: object = None
+    coefficient: str = None
+    fixed: dict = None
+
+    @property
+    def param_names(self):
+        """Names of the fitted coefficients, in regressor order."""
+        return ("stiffness", "damping") + (() if self.element is None else (self.coefficient,))
+
+    def regressors(self, d, v):
+        """The law's regressors on a relative displacement ``d`` and velocity
+        ``v`` (arrays of one length): columns of the force per unit
+        coefficient."""
+        columns = [d, v]
+        if self.element is not None:
+            columns.append(Oscillator(1.0, 0.0, 0.0, (self.element,)).restoring_force(d, v))
+        return np.stack(columns, axis=-1)
+
+    def parameters(self, coefficients):
+        """The physical parameters at ``coefficients`` (fixed ones included)."""
+        return {**dict(zip(self.param_names, map(float, coefficients))), **(self.fixed or {})}
+
+    def with_coefficients(self, coefficients):
+        """The nonlinear element at ``coefficients`` (None for the linear law)."""
+        if self.element is None:
+            return None
+        p = dict(zip(self.element.param_names, self.element.parameters()))
+        p[self.coefficient] = float(coefficients[2])
+        return type(self.element)(*[p[name] for name in self.element.param_names])
+
+
+def force_laws(names, displacement_rms, velocity_rms):
+    """The laws named in ``names`` for a connection whose relative motion
+    has these rms values (a backlash gives one law per profiled gap).
+
+    Parameters
+    ----------
+    names : sequence of str
+        From :data:`LAW_NAMES`.
+    displacement_rms, velocity_rms : float
+        Rms of the connection's relative displacement and velocity, m and m/s.
+
+    Returns
+    -------
+    laws : list of ForceLaw
+    """
+    unknown = [n for n in names if n not in LAW_NAMES]
+    if unknown:
+        raise ValueError(f"unknown force laws {unknown}; the laws are {list(LAW_NAMES)}.")
+    v_smooth = max(FRICTION_SMOOTHING * velocity_rms, 1e-300)
+    single = {
+        "linear": ForceLaw("linear"),
+        "cubic_stiffness": ForceLaw("cubic_stiffness", CubicStiffness(1.0), "k3"),
+        "quadratic_stiffness": ForceLaw("quadratic_stiffness", QuadraticStiffness(1.0), "k2"),
+        "coulomb_friction": ForceLaw("coulomb_friction", CoulombFriction(1.0, v_smooth), "fc",
+                                     dict(v_smooth=v_smooth)),
+        "quadratic_damping": ForceLaw("quadratic_damping", QuadraticDamping(1.0), "c2"),
+    }
+    laws = []
+    for name in names:
+        if name == "backlash":
+            for g in BACKLASH_GAPS:
+                gap = g * displacement_rms
+                laws.append(ForceLaw("backlash", DeadZoneSpring(1.0, gap), "kb", dict(gap=gap)))
+        else:
+            laws.append(single[name])
+    return laws

@@ -1,0 +1,394 @@
+"""Where in a structure the simulator is wrong: the connection whose force,
+on the measured motion, explains the nominal's error.
+
+The equation of motion of the real structure is the nominal's plus the
+forces it misses.  A force ``f`` acting on the relative motion of two points
+``a`` and ``b`` (``+f`` at ``a``, ``-f`` at ``b``; ``b`` may be the ground)
+changes every sensor's spectrum by ``-H_c(w) F(w)``, ``H_c`` the nominal's
+response to that pair of forces.  So, line by line,
+
+    Y(w) - H(w) U(w) = -H_c(w) F[f(d_ab, v_ab)](w),
+
+the left side the nominal's error on the measured records, ``d_ab`` and
+``v_ab`` the relative displacement and velocity of the two points, which
+the sensors at both points measure (nonlinear identification through
+feedback of the outputs, Adams and Allemang 2000).  A force law linear in
+its coefficients (:mod:`~sklearn_pnlss.gap.connections.laws`) makes this a
+linear least-squares problem for every place and law: all candidates in
+seconds, with no simulation, on every training record at once, so that a
+law has to hold from level to level.
+
+Three readings make the measured motion fit for this:
+
+- only lines where the relative motion stands above its noise are kept
+  (``MOTION_SNR``): its double integration amplifies the noise at low
+  frequencies, and a noisy regressor biases every coefficient;
+- the nonlinear force is evaluated at ``ALIAS_FACTOR`` times the data rate
+  (zero-padded spectra): a cubic of a band-limited motion has three times
+  its bandwidth, which folds back into the band at the data rate;
+- each output is weighted by its own noise, so that an accelerometer with
+  large readings does not outvote the others.
+"""
+from dataclasses import dataclass, field
+from itertools import combinations
+from numbers import Integral, Real
+
+import numpy as np
+from sklearn.base import BaseEstimator
+from sklearn.utils.validation import check_is_fitted
+
+from ...physics.structure import SENSOR_KINDS, Structure
+from ...utils.parameters import Interval, validates_parameters
+from .laws import LAW_NAMES, force_laws
+from .spectra import PeriodSpectra
+
+__all__ = ["ConnectionLocator", "ConnectionCandidate"]
+
+#: A line of the relative motion is used where its power is this many times
+#: its noise variance (20 dB): below it the double integration hands the
+#: regressors more noise than motion, which biases every coefficient (a
+#: chain's cubic spring with 0.1 % sensor noise: at 10 dB the wrong pair of
+#: masses explained most, at 20, 30 and 40 dB the right one 99.9 % with
+#: k3 within 1 %).
+MOTION_SNR = 100.0
+#: Noise variance an output is credited with at least, relative to its
+#: power in the band (noise-free simulated records).
+NOISE_FLOOR = 1e-12
+#: The nonlinear forces are evaluated at this multiple of the data rate.
+ALIAS_FACTOR = 8
+
+
+@dataclass(frozen=True)
+class ConnectionCandidate:
+    """A force law at a place, fitted to the nominal's error.
+
+    Attributes
+    ----------
+    place : tuple of (str, str or None)
+        The two points (the second None: the ground).
+    law : ForceLaw
+    coefficients : ndarray
+        The law's coefficients (see :attr:`ForceLaw.param_names`).
+    parameters : dict
+        Physical parameters: the stiffness (N/m) and damping (N s/m) changes
+        at the connection, the element's coefficient and fixed parameters.
+    explained : float
+        Share of the nominal's (noise-weighted) error on the training
+        records that the connection's force explains.
+    """
+
+    place: tuple
+    law: object
+    coefficients: np.ndarray
+    parameters: dict
+    explained: float
+
+    @property
+    def place_name(self):
+        a, b = self.place
+        return f"{a} - {'ground' if b is None else b}"
+
+    def __repr__(self):
+        return f"<{self.law.name} between {self.place_name}: explains {self.explained:.1%}>"
+
+
+@dataclass
+class _PlaceData:
+    """What one place's fits need on a set of records."""
+
+    response: np.ndarray  # H_c: (n_lines, n_outputs)
+    displacement: list = field(default_factory=list)  # per record, at ALIAS_FACTOR x the rate
+    velocity: list = field(default_factory=list)
+
+
+class ConnectionLocator(BaseEstimator):
+    """Find the connection of a structure whose missing force explains the
+    simulator's error on measured periodic records.
+
+    Every place (a pair of sensed points, or a sensed point and the
+    ground) is tried with every force law; each is fitted by linear least
+    squares on the nominal's error in the frequency domain, the force being
+    evaluated on the measured relative motion (see the module's notes).  No
+    simulation is run: a structural test's dozens of candidates take
+    seconds.  What it gives is a ranking by the share of the error each
+    connection explains; a simulation of the chosen connection then tells
+    how far the gap closes.
+
+    Parameters
+    ----------
+    nominal : Structure
+        The linear simulator (its connections are left out).
+    fs : float
+        Sampling rate, Hz.
+    period : int
+        Samples per period: every record is a whole number of steady-state
+        periods (two or more).
+    inputs : sequence of str
+        The points the input forces act on, one per column of ``X``.
+    sensors : sequence of (str, str)
+        ``(point, kind)`` of each column of ``y``, ``kind`` one of
+        ``"displacement"``, ``"velocity"``, ``"acceleration"``.
+    places : sequence of (str, str or None), default=None
+        The places tried; None: every pair of sensed points and every
+        sensed point to the ground.
+    laws : sequence of str, default=None
+        Force laws from :data:`~sklearn_pnlss.gap.connections.laws.LAW_NAMES`;
+        None: all of them.
+    f_band : (float, float), default=None
+        Band where the nominal is trusted and the error is read, Hz; None:
+        the lines the input excites.
+    transient_periods : int, default=0
+        Periods at the start of each record left out.
+
+    Attributes
+    ----------
+    ranking_ : list of ConnectionCandidate
+        Every place's best law that is not linear, most explaining first.
+    linear_ : dict
+        Each place's linear law (a stiffness and damping change there).
+    best_ : ConnectionCandidate
+        ``ranking_[0]``.
+    nominal_error_ : ndarray of shape (n_signals,)
+        The nominal's rms error over the rms output in the band, per
+        training record (outputs weighted by their noise).
+
+    Examples
+    --------
+    Three masses in a chain, a cubic spring between the middle one and the
+    tip, accelerometers on all three, two levels of a periodic multisine:
+
+    >>> import numpy as np
+    >>> from sklearn_pnlss.gap import ConnectionLocator
+    >>> from sklearn_pnlss.physics import Connection, CubicStiffness, Structure
+    >>> points = ["base", "middle", "tip"]
+    >>> M, K = np.diag([3.0, 2.0, 1.0]), 5e4 * np.array([[2.0, -1, 0], [-1, 2, -1], [0, -1, 1]])
+    >>> C = 1e-4 * K + 0.5 * M
+    >>> truth = Structure(M, C, K, points=points,
+    ...                   connections=[Connection(CubicStiffness(3e8), "middle", "tip")])
+    >>> sensors = [(p, "acceleration") for p in points]
+    >>> rng = np.random.default_rng(0)
+    >>> spectrum = np.zeros(2049, complex)
+    >>> spectrum[10:850:2] = np.exp(2j * np.pi * rng.random(420))
+    >>> u = np.fft.irfft(spectrum)
+    >>> X, Y = [], []
+    >>> for level in (20.0, 60.0):
+    ...     a = truth.simulate(level * u / u.std(), fs=200.0, inputs="base", sensors=sensors,
+    ...                        periodic=True, oversampling=20, decimation=(4, 5))
+    ...     X.append(np.tile(level * u / u.std(), 2)[:, None])
+    ...     Y.append(np.tile(a, (2, 1)) * (1 + 1e-3 * rng.standard_normal((8192, 3))))
+    >>> loc = ConnectionLocator(Structure(M, C, K, points=points), fs=200.0, period=4096,
+    ...                         inputs=["base"], sensors=sensors).fit(X, Y)
+    >>> loc.best_.place, loc.best_.law.name
+    (('middle', 'tip'), 'cubic_stiffness')
+    >>> bool(abs(loc.best_.parameters["k3"] / 3e8 - 1) < 0.05)
+    True
+    """
+
+    _parameter_constraints = {
+        "nominal": [Structure],
+        "fs": [Interval(Real, 0, None, closed="neither")],
+        "period": [Interval(Integral, 16, None, closed="left")],
+        "inputs": [list, tuple],
+        "sensors": [list, tuple],
+        "places": [list, tuple, None],
+        "laws": [list, tuple, None],
+        "f_band": [tuple, list, None],
+        "transient_periods": [Interval(Integral, 0, None, closed="left")],
+    }
+
+    def __init__(self, nominal, *, fs, period, inputs, sensors, places=None, laws=None, f_band=None,
+                 transient_periods=0):
+        self.nominal = nominal
+        self.fs = fs
+        self.period = period
+        self.inputs = inputs
+        self.sensors = sensors
+        self.places = places
+        self.laws = laws
+        self.f_band = f_band
+        self.transient_periods = transient_periods
+
+    # -- fitting ------------------------------------------------------------
+    @validates_parameters
+    def fit(self, X, y):
+        """Fit every force law at every place to the nominal's error.
+
+        Parameters
+        ----------
+        X : signals, (n_signals, n_samples, n_inputs) or a list
+            Measured forces at ``inputs``.
+        y : signals, (n_signals, n_samples, n_sensors) or a list
+            Measured responses of ``sensors``.
+
+        Returns
+        -------
+        self : ConnectionLocator
+        """
+        spectra = self._spectra(X, y)
+        self.lines_ = self._band_lines(spectra)
+        freqs = spectra.freqs[self.lines_]
+        self.input_response_ = self.nominal.frequency_response(freqs, inputs=list(self.inputs),
+                                                               sensors=list(self.sensors))
+        noise = spectra.Y_noise[:, self.lines_].mean(axis=(0, 1))
+        power = np.mean(np.abs(spectra.Y[:, self.lines_]) ** 2, axis=(0, 1))
+        # noise-free records (a simulation) weigh outputs by their size
+        self.output_weights_ = 1.0 / np.sqrt(np.maximum(noise, NOISE_FLOOR * power))
+        error = self._weighted_error(spectra)
+        self.nominal_error_ = np.sqrt(np.sum(np.abs(error) ** 2, axis=(1, 2)) / np.sum(
+            np.abs(spectra.Y[:, self.lines_] * self.output_weights_) ** 2, axis=(1, 2)))
+        self.places_ = self._places()
+        self.rms_ = {}
+        ranking, self.linear_ = [], {}
+        for place in self.places_:
+            data = self._place_data(place, spectra, freqs)
+            d_rms = np.sqrt(np.mean(np.concatenate(data.displacement) ** 2))
+            v_rms = np.sqrt(np.mean(np.concatenate(data.velocity) ** 2))
+            self.rms_[place] = (d_rms, v_rms)
+            fits = [self._fit_law(law, place, data, error) for law in
+                    force_laws(self.laws or LAW_NAMES, d_rms, v_rms)]
+            linear = [c for c in fits if c.law.element is None]
+            if linear:
+                self.linear_[place] = linear[0]
+            nonlinear = [c for c in fits if c.law.element is not None]
+            if nonlinear:
+                ranking.append(max(nonlinear, key=lambda c: c.explained))
+        if not ranking:
+            ranking = list(self.linear_.values())
+        self.ranking_ = sorted(ranking, key=lambda c: -c.explained)
+        self.best_ = self.ranking_[0]
+        return self
+
+    def _spectra(self, X, y):
+        spectra = PeriodSpectra.from_signals(X, y, period=self.period, fs=self.fs,
+                                             transient_periods=self.transient_periods)
+        if spectra.U.shape[2] != len(self.inputs):
+            raise ValueError(f"X has {spectra.U.shape[2]} input channel(s) but inputs names "
+                             f"{len(self.inputs)} point(s): one point per column of X.")
+        if spectra.Y.shape[2] != len(self.sensors):
+            raise ValueError(f"y has {spectra.Y.shape[2]} channel(s) but sensors names {len(self.sensors)}: "
+                             "one (point, kind) per column of y.")
+        return spectra
+
+    def _band_lines(self, spectra):
+        freqs = spectra.freqs
+        if self.f_band is None:
+            power = np.sum(np.abs(spectra.U) ** 2, axis=(0, 2))
+            excited = np.flatnonzero(power > 1e-6 * power.max())
+            excited = excited[excited > 0]
+            lo, hi = freqs[excited.min()], freqs[excited.max()]
+        else:
+            lo, hi = self.f_band
+        lines = np.flatnonzero((freqs >= lo) & (freqs <= hi) & (freqs > 0))
+        if lines.size < 4:
+            raise ValueError(f"f_band={self.f_band!r} holds {lines.size} lines of the spectrum; widen it.")
+        return lines
+
+    def _places(self):
+        sensed = list(dict.fromkeys(point for point, _ in self.sensors))
+        if self.places is None:
+            return [*combinations(sensed, 2), *((p, None) for p in sensed)]
+        places = []
+        for i, place in enumerate(self.places):
+            a, b = (tuple(place) + (None,))[:2]
+            for p in (a, b):
+                if p is not None and p not in sensed:
+                    raise ValueError(f"places[{i}] names {p!r}, which no sensor measures; a connection's "
+                                     f"relative motion must be measured at both its points ({sensed}).")
+            places.append((a, b))
+        return places
+
+    def _weighted_error(self, spectra):
+        """The nominal's error at the band's lines, outputs weighted by
+        their noise: (n_signals, n_lines, n_outputs)."""
+        Y = spectra.Y[:, self.lines_]
+        predicted = np.einsum("los,nls->nlo", self.input_response_, spectra.U[:, self.lines_])
+        return (Y - predicted) * self.output_weights_
+
+    def _motion(self, point, spectra):
+        """The measured displacement spectra of ``point`` and their noise
+        variance, from its first sensor (zero at DC: an offset is
+        unknown)."""
+        j = next(i for i, (p, _) in enumerate(self.sensors) if p == point)
+        power = SENSOR_KINDS.index(self.sensors[j][1])
+        s = 2j * np.pi * spectra.freqs
+        s[0] = 1.0
+        D = spectra.Y[:, :, j] / s**power
+        noise = spectra.Y_noise[:, :, j] / np.abs(s) ** (2 * power)
+        D[:, 0] = 0.0
+        return D, noise
+
+    def _place_data(self, place, spectra, freqs):
+        a, b = place
+        response = self.nominal.frequency_response(freqs, inputs=[a] if b is None else [a, b],
+                                                   sensors=list(self.sensors))
+        data = _PlaceData(response[:, :, 0] - (0.0 if b is None else response[:, :, 1]))
+        D, noise = self._motion(a, spectra)
+        if b is not None:
+            D_b, noise_b = self._motion(b, spectra)
+            D, noise = D - D_b, noise + noise_b
+        D = np.where(np.abs(D) ** 2 > MOTION_SNR * noise, D, 0.0)
+        s = 2j * np.pi * spectra.freqs
+        n_fine = ALIAS_FACTOR * self.period
+        for Dk in D:
+            data.displacement.append(np.fft.irfft(Dk, n_fine) * ALIAS_FACTOR)
+            data.velocity.append(np.fft.irfft(s * Dk, n_fine) * ALIAS_FACTOR)
+        return data
+
+    def _columns(self, law, data, index):
+        """The design columns of record ``index``: each regressor's force
+        through the place's response, weighted like the error
+        (n_lines * n_outputs, n_coefficients), complex."""
+        forces = law.regressors(data.displacement[index], data.velocity[index])
+        F = np.fft.rfft(forces, axis=0)[self.lines_] / ALIAS_FACTOR
+        cols = -data.response[:, :, None] * F[:, None, :] * self.output_weights_[None, :, None]
+        return cols.reshape(-1, F.shape[1])
+
+    def _fit_law(self, law, place, data, error):
+        A = np.concatenate([self._columns(law, data, i) for i in range(error.shape[0])])
+        b = error.reshape(-1)
+        A2, b2 = np.concatenate([A.real, A.imag]), np.concatenate([b.real, b.imag])
+        scale = np.linalg.norm(A2, axis=0)
+        scale[scale == 0] = 1.0
+        coef = np.linalg.lstsq(A2 / scale, b2, rcond=None)[0] / scale
+        explained = 1.0 - np.sum((b2 - A2 @ coef) ** 2) / np.sum(b2**2)
+        return ConnectionCandidate(place, law, coef, law.parameters(coef), float(explained))
+
+    # -- reading new records -------------------------------------------------
+    def explained(self, X, y, candidate=None):
+        """Share of the nominal's error on each of these records that a
+        fitted candidate's force explains, its coefficients fixed.
+
+        Parameters
+        ----------
+        X, y : signals
+            Periodic records, as in :meth:`fit` (validation levels).
+        candidate : ConnectionCandidate, default=None
+            One of ``ranking_`` or ``linear_``'s values; None: ``best_``.
+
+        Returns
+        -------
+        nominal_error : ndarray of shape (n_signals,)
+            The nominal's rms error over the rms output in the band.
+        explained : ndarray of shape (n_signals,)
+            The share of the squared error the candidate's force removes
+            (negative where it adds error).
+        """
+        check_is_fitted(self, "best_")
+        candidate = self.best_ if candidate is None else candidate
+        spectra = self._spectra(X, y)
+        data = self._place_data(candidate.place, spectra, spectra.freqs[self.lines_])
+        error = self._weighted_error(spectra)
+        out = []
+        for i in range(error.shape[0]):
+            e = error[i].reshape(-1)
+            left = e - self._columns(candidate.law, data, i) @ candidate.coefficients
+            out.append(1.0 - np.sum(np.abs(left) ** 2) / np.sum(np.abs(e) ** 2))
+        size = np.sum(np.abs(spectra.Y[:, self.lines_] * self.output_weights_) ** 2, axis=(1, 2))
+        return np.sqrt(np.sum(np.abs(error) ** 2, axis=(1, 2)) / size), np.array(out)
+
+    def score(self, X, y):
+        """Share of the nominal's error on these records, all together, that
+        the best connection explains (1 is perfect, 0 no better than the
+        nominal)."""
+        nominal_error, explained = self.explained(X, y)
+        return float(np.sum(nominal_error**2 * explained) / np.sum(nominal_error**2))
