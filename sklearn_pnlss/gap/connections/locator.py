@@ -29,7 +29,7 @@ Three readings make the measured motion fit for this:
 - each output is weighted by its own noise, so that an accelerometer with
   large readings does not outvote the others.
 """
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from itertools import combinations
 from numbers import Integral, Real
 
@@ -73,8 +73,10 @@ class ConnectionCandidate:
         Physical parameters: the stiffness (N/m) and damping (N s/m) changes
         at the connection, the element's coefficient and fixed parameters.
     explained : float
-        Share of the nominal's (noise-weighted) error on the training
-        records that the connection's force explains.
+        Share of the nominal's (noise-weighted) squared error on the
+        training records that the connection's force explains.
+    linear_explained : float
+        The share a stiffness and damping change at the same place explains.
     """
 
     place: tuple
@@ -82,6 +84,15 @@ class ConnectionCandidate:
     coefficients: np.ndarray
     parameters: dict
     explained: float
+    linear_explained: float = None
+
+    @property
+    def nonlinear_gain(self):
+        """What the law explains beyond a linear change at its place: the
+        share a nonlinear element is credited with (a nominal read at
+        another level, or integrated at another rate, leaves a linear error
+        that a linear change there partly explains)."""
+        return self.explained - (self.explained if self.linear_explained is None else self.linear_explained)
 
     @property
     def place_name(self):
@@ -143,9 +154,12 @@ class ConnectionLocator(BaseEstimator):
     Attributes
     ----------
     ranking_ : list of ConnectionCandidate
-        Every place's best law that is not linear, most explaining first.
+        Every place's best nonlinear law (its linear one when ``laws`` has
+        none), most explaining first.
     linear_ : dict
-        Each place's linear law (a stiffness and damping change there).
+        Each place's linear law (a stiffness and damping change there),
+        fitted whatever ``laws`` holds: the nonlinear laws are judged
+        against it (:attr:`ConnectionCandidate.nonlinear_gain`).
     best_ : ConnectionCandidate
         ``ranking_[0]``.
     nominal_error_ : ndarray of shape (n_signals,)
@@ -244,16 +258,11 @@ class ConnectionLocator(BaseEstimator):
             d_rms = np.sqrt(np.mean(np.concatenate(data.displacement) ** 2))
             v_rms = np.sqrt(np.mean(np.concatenate(data.velocity) ** 2))
             self.rms_[place] = (d_rms, v_rms)
-            fits = [self._fit_law(law, place, data, error) for law in
-                    force_laws(self.laws or LAW_NAMES, d_rms, v_rms)]
-            linear = [c for c in fits if c.law.element is None]
-            if linear:
-                self.linear_[place] = linear[0]
-            nonlinear = [c for c in fits if c.law.element is not None]
-            if nonlinear:
-                ranking.append(max(nonlinear, key=lambda c: c.explained))
-        if not ranking:
-            ranking = list(self.linear_.values())
+            linear = self.linear_[place] = self._fit_law(force_laws(["linear"], d_rms, v_rms)[0], place, data,
+                                                         error)
+            fits = [replace(self._fit_law(law, place, data, error), linear_explained=linear.explained)
+                    for law in force_laws(self.laws or LAW_NAMES, d_rms, v_rms) if law.element is not None]
+            ranking.append(max(fits, key=lambda c: c.explained) if fits else linear)
         self.ranking_ = sorted(ranking, key=lambda c: -c.explained)
         self.best_ = self.ranking_[0]
         return self
@@ -354,6 +363,21 @@ class ConnectionLocator(BaseEstimator):
         return ConnectionCandidate(place, law, coef, law.parameters(coef), float(explained))
 
     # -- reading new records -------------------------------------------------
+    def _energies(self, X, y, candidate):
+        """Per record: the nominal's squared (weighted) error, what is left
+        of it once the candidate's force is added, and the output's."""
+        check_is_fitted(self, "best_")
+        candidate = self.best_ if candidate is None else candidate
+        spectra = self._spectra(X, y)
+        data = self._place_data(candidate.place, spectra, spectra.freqs[self.lines_])
+        error = self._weighted_error(spectra)
+        nominal, left = [], []
+        for i, e in enumerate(error.reshape(error.shape[0], -1)):
+            nominal.append(np.sum(np.abs(e) ** 2))
+            left.append(np.sum(np.abs(e - self._columns(candidate.law, data, i) @ candidate.coefficients) ** 2))
+        size = np.sum(np.abs(spectra.Y[:, self.lines_] * self.output_weights_) ** 2, axis=(1, 2))
+        return np.array(nominal), np.array(left), size
+
     def explained(self, X, y, candidate=None):
         """Share of the nominal's error on each of these records that a
         fitted candidate's force explains, its coefficients fixed.
@@ -373,22 +397,12 @@ class ConnectionLocator(BaseEstimator):
             The share of the squared error the candidate's force removes
             (negative where it adds error).
         """
-        check_is_fitted(self, "best_")
-        candidate = self.best_ if candidate is None else candidate
-        spectra = self._spectra(X, y)
-        data = self._place_data(candidate.place, spectra, spectra.freqs[self.lines_])
-        error = self._weighted_error(spectra)
-        out = []
-        for i in range(error.shape[0]):
-            e = error[i].reshape(-1)
-            left = e - self._columns(candidate.law, data, i) @ candidate.coefficients
-            out.append(1.0 - np.sum(np.abs(left) ** 2) / np.sum(np.abs(e) ** 2))
-        size = np.sum(np.abs(spectra.Y[:, self.lines_] * self.output_weights_) ** 2, axis=(1, 2))
-        return np.sqrt(np.sum(np.abs(error) ** 2, axis=(1, 2)) / size), np.array(out)
+        nominal, left, size = self._energies(X, y, candidate)
+        return np.sqrt(nominal / size), 1.0 - left / nominal
 
     def score(self, X, y):
-        """Share of the nominal's error on these records, all together, that
-        the best connection explains (1 is perfect, 0 no better than the
-        nominal)."""
-        nominal_error, explained = self.explained(X, y)
-        return float(np.sum(nominal_error**2 * explained) / np.sum(nominal_error**2))
+        """Share of the nominal's squared error on these records, all
+        together, that the best connection's force explains (1: all of it,
+        0: none, negative: it adds error)."""
+        nominal, left, _ = self._energies(X, y, None)
+        return float(1.0 - np.sum(left) / np.sum(nominal))
