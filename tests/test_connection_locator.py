@@ -110,15 +110,17 @@ def test_the_f16s_gap_lies_at_the_wing_and_softens_beyond_a_clearance(f16_dir):
     error acts at the wing sensor (to the ground, as these three sensors
     resolve it) and softens beyond a clearance; with its coefficients fixed
     it explains at least 90 % of the error on validation levels 4 and 6.
-    The wing-payload pair explains little: their relative motion is within
-    20 dB of its noise at most lines of the band (see the guide)."""
+    The wing-payload pair explains little, though their relative motion
+    is measured (above 20 dB of its noise at 77-86 % of the band's lines):
+    a nominal read from one shaker position knows the interface only
+    through the global modes, not its own flexibility (see the guide)."""
     points = ["drive", "wing", "payload"]
     sensors = [(p, "acceleration") for p in points]
     data = {level: load_f16(f16_dir, level=level, validation_level=None) for level in range(1, 8)}
     nominal = modal_nominal(data[1].X, data[1].y, fs=400.0, points=points, driving_point="drive",
                             period=8192, f_band=(2.0, 15.0))
     loc = ConnectionLocator(nominal, fs=400.0, period=8192, inputs=["drive"], sensors=sensors,
-                            f_band=(2.0, 15.0), transient_periods=1)
+                            f_band=(2.0, 15.0))
     loc.fit([data[k].X[0] for k in (1, 3, 5, 7)], [data[k].y[0] for k in (1, 3, 5, 7)])
     best = loc.best_
     assert best.place == ("wing", None) and best.law.name == "backlash"
