@@ -232,6 +232,46 @@ class Structure:
     def __repr__(self):
         return f"Structure(n_dof={self.n_dof}, points={self.points!r}, connections={self.connections!r})"
 
+    def with_connections(self, connections=(), *, springs=()):
+        """A copy with more connections and linear springs and dampers.
+
+        Parameters
+        ----------
+        connections : sequence of Connection, default=()
+            Added to the structure's own.
+        springs : sequence of (str, str or None, float, float), default=()
+            ``(point, other, stiffness, damping)``: a linear spring (N/m) and
+            damper (N s/m) on the relative motion of two points (``other``
+            None: the ground), added to the matrices (a stiffness change
+            where the structure joins, negative ones included).
+
+        Returns
+        -------
+        structure : Structure
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from sklearn_pnlss.physics import Structure
+        >>> s = Structure(np.eye(2), np.zeros((2, 2)), np.diag([1.0, 2.0]), points=["a", "b"])
+        >>> s.with_connections(springs=[("a", "b", 0.5, 0.0)]).stiffness
+        array([[ 1.5, -0.5],
+               [-0.5,  2.5]])
+        """
+        out = Structure.__new__(Structure)
+        out.mass, out.points, out.point_matrix = self.mass, self.points, self.point_matrix
+        out.damping, out.stiffness = self.damping.copy(), self.stiffness.copy()
+        for i, (point, other, k, c) in enumerate(springs):
+            for p in (point, other):
+                if p is not None and p not in self.points:
+                    raise ValueError(f"springs[{i}] names the point {p!r}, which is not one of {self.points}.")
+            d = self._row(point) - (0.0 if other is None else self._row(other))
+            out.stiffness += float(k) * np.outer(d, d)
+            out.damping += float(c) * np.outer(d, d)
+        out.connections = self.connections + tuple(connections)
+        out._check_connections()
+        return out
+
     @property
     def n_dof(self):
         """Number of degrees of freedom (modes for a modal structure)."""
