@@ -5,11 +5,12 @@ from .verdict.decision import RankedEffect
 from .diagnosis import GapDiagnosis
 from .candidates.effect import EffectTerms
 from .candidates.effects import Effect, Scales, default_effects
-from .connections import ConnectionCandidate, ConnectionLocator
+from .connections import ConnectionCandidate, ConnectionLocator, StructuralGapDiagnosis, StructuralGapReport
 from .linear_nominal import linear_nominal
 from .modal_nominal import modal_nominal
 from .report import GapReport
 from .results import ChannelDelay
 
 __all__ = ["GapDiagnosis", "GapReport", "RankedEffect", "ChannelDelay", "Effect", "EffectTerms", "Scales",
-           "default_effects", "linear_nominal", "modal_nominal", "ConnectionLocator", "ConnectionCandidate"]
+           "default_effects", "linear_nominal", "modal_nominal", "ConnectionLocator", "ConnectionCandidate",
+           "StructuralGapDiagnosis", "StructuralGapReport"]

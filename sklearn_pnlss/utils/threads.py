@@ -1,7 +1,12 @@
-"""BLAS on one thread where the library runs threads of its own."""
+"""The library's own threads: independent signals simulated side by side,
+and BLAS on one thread meanwhile."""
+import os
+from concurrent.futures import ThreadPoolExecutor
+from functools import lru_cache
+
 from threadpoolctl import ThreadpoolController
 
-__all__ = ["one_blas_thread"]
+__all__ = ["one_blas_thread", "each_in_threads"]
 
 _CONTROLLER = None  # made once: each one scans the loaded libraries (tens of ms)
 
@@ -21,3 +26,20 @@ def one_blas_thread():
     if _CONTROLLER is None:
         _CONTROLLER = ThreadpoolController()
     return _CONTROLLER.limit(limits=1, user_api="blas")
+
+
+@lru_cache(maxsize=1)
+def _pool():
+    """The threads independent signals are simulated in, made once."""
+    return ThreadPoolExecutor(max_workers=os.cpu_count(), thread_name_prefix="signals")
+
+
+def each_in_threads(func, *columns):
+    """``func`` on each row of the zipped ``columns`` (one signal each), in
+    parallel threads, results in order.  The compiled integrators release
+    the GIL, so the signals of a set keep every core busy when a single
+    candidate is simulated (a refinement, the last long fit of a pool)."""
+    rows = list(zip(*columns))
+    if len(rows) < 2 or (os.cpu_count() or 1) < 2:
+        return [func(*row) for row in rows]
+    return [f.result() for f in [_pool().submit(func, *row) for row in rows]]

@@ -74,13 +74,19 @@ class ForceLaw:
         """The physical parameters at ``coefficients`` (fixed ones included)."""
         return {**dict(zip(self.param_names, map(float, coefficients))), **(self.fixed or {})}
 
-    def with_coefficients(self, coefficients):
-        """The nonlinear element at ``coefficients`` (None for the linear law)."""
+    @property
+    def free_names(self):
+        """The parameters a fit by simulation frees: the coefficients and a
+        clearance (profiled on a grid here)."""
+        return self.param_names + (("gap",) if self.fixed and "gap" in self.fixed else ())
+
+    def element_with(self, parameters):
+        """The nonlinear element at these physical ``parameters`` (None for
+        the linear law); a parameter not given takes the element's default
+        (a backlash's corner width follows its clearance)."""
         if self.element is None:
             return None
-        p = dict(zip(self.element.param_names, self.element.parameters()))
-        p[self.coefficient] = float(coefficients[2])
-        return type(self.element)(*[p[name] for name in self.element.param_names])
+        return type(self.element)(**{n: parameters[n] for n in self.element.param_names if n in parameters})
 
 
 def force_laws(names, displacement_rms, velocity_rms):
@@ -101,7 +107,7 @@ def force_laws(names, displacement_rms, velocity_rms):
     unknown = [n for n in names if n not in LAW_NAMES]
     if unknown:
         raise ValueError(f"unknown force laws {unknown}; the laws are {list(LAW_NAMES)}.")
-    v_smooth = max(FRICTION_SMOOTHING * velocity_rms, 1e-300)
+    v_smooth = float(max(FRICTION_SMOOTHING * velocity_rms, 1e-300))
     single = {
         "linear": ForceLaw("linear"),
         "cubic_stiffness": ForceLaw("cubic_stiffness", CubicStiffness(1.0), "k3"),
@@ -114,7 +120,7 @@ def force_laws(names, displacement_rms, velocity_rms):
     for name in names:
         if name == "backlash":
             for g in BACKLASH_GAPS:
-                gap = g * displacement_rms
+                gap = float(g * displacement_rms)
                 laws.append(ForceLaw("backlash", DeadZoneSpring(1.0, gap), "kb", dict(gap=gap)))
         else:
             laws.append(single[name])

@@ -156,6 +156,9 @@ class ConnectionLocator(BaseEstimator):
     ranking_ : list of ConnectionCandidate
         Every place's best nonlinear law (its linear one when ``laws`` has
         none), most explaining first.
+    candidates_ : list of ConnectionCandidate
+        Every place's every nonlinear law (a backlash at its best
+        clearance), most explaining first.
     linear_ : dict
         Each place's linear law (a stiffness and damping change there),
         fitted whatever ``laws`` holds: the nonlinear laws are judged
@@ -252,7 +255,7 @@ class ConnectionLocator(BaseEstimator):
             np.abs(spectra.Y[:, self.lines_] * self.output_weights_) ** 2, axis=(1, 2)))
         self.places_ = self._places()
         self.rms_ = {}
-        ranking, self.linear_ = [], {}
+        ranking, self.linear_, self.candidates_ = [], {}, []
         for place in self.places_:
             data = self._place_data(place, spectra, freqs)
             d_rms = np.sqrt(np.mean(np.concatenate(data.displacement) ** 2))
@@ -263,7 +266,10 @@ class ConnectionLocator(BaseEstimator):
             fits = [replace(self._fit_law(law, place, data, error), linear_explained=linear.explained)
                     for law in force_laws(self.laws or LAW_NAMES, d_rms, v_rms) if law.element is not None]
             ranking.append(max(fits, key=lambda c: c.explained) if fits else linear)
+            for name in dict.fromkeys(c.law.name for c in fits):  # a backlash's best clearance
+                self.candidates_.append(max((c for c in fits if c.law.name == name), key=lambda c: c.explained))
         self.ranking_ = sorted(ranking, key=lambda c: -c.explained)
+        self.candidates_.sort(key=lambda c: -c.explained)
         self.best_ = self.ranking_[0]
         return self
 

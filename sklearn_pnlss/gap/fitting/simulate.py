@@ -13,16 +13,14 @@ above its resonance), the one the experiment settled on is an unknown of
 the experiment, not of the model: started from rest, the right model can
 settle on the other one, and no parameter change brings it back.
 """
-import os
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 from sklearn.utils import check_random_state
 
 from ...physics.oscillator import STATE_Z, band_limited_noise
 from ...physics.resampling import decimate_columns, decimate_fir, upsample_fft
+from ...utils.threads import each_in_threads
 from ...utils.validation import is_periodic
 
 __all__ = ["SignalSet", "simulate_signals", "simulate_sensitivities", "measured_starts", "prime_factors",
@@ -274,23 +272,6 @@ def _fine_response(osc, u_fine, P, fs_fine, transform, max_periods=MAX_PERIODS, 
                              initial_state=_continuation_state(osc, start), max_abs=max_abs).y, False, None, 1
 
 
-@lru_cache(maxsize=1)
-def _signal_pool():
-    """The threads the signals of a set are simulated in, made once."""
-    return ThreadPoolExecutor(max_workers=os.cpu_count(), thread_name_prefix="signals")
-
-
-def _each_signal(func, *columns):
-    """``func`` on each signal (the zipped ``columns``), in parallel threads
-    (the integrator releases the GIL), results in order.  The signals of a
-    set are independent: a candidate fitted alone (the leader's refinement,
-    the last long fit of a pool) keeps every core busy."""
-    rows = list(zip(*columns))
-    if len(rows) < 2 or (os.cpu_count() or 1) < 2:
-        return [func(*row) for row in rows]
-    return [f.result() for f in [_signal_pool().submit(func, *row) for row in rows]]
-
-
 def simulate_signals(osc, signals, transform=None, *, noise_rms=0.0, random_state=None,
                      max_periods=MAX_PERIODS, max_abs=None, record=False, steady_states=None):
     """Simulate ``osc`` on every signal of a :class:`SignalSet`.
@@ -352,7 +333,7 @@ def simulate_signals(osc, signals, transform=None, *, noise_rms=0.0, random_stat
         return decimated(y_fine, circular, repeats), circular, steady
 
     out = []
-    for y, circular, steady in _each_signal(one, signals.u_fine, signals.n_periods, starts):
+    for y, circular, steady in each_in_threads(one, signals.u_fine, signals.n_periods, starts):
         if steady_states is not None:
             steady_states.append(steady)
         if noise_rms > 0:
@@ -405,4 +386,4 @@ def simulate_sensitivities(osc, signals, transform=None, *, max_periods=MAX_PERI
             dy = decimate_columns(dy, signals.decimation, periodic=periodic)
         return np.tile(dy, (P, 1)) if periodic else dy
 
-    return _each_signal(one, signals.u_fine, signals.n_periods, starts, known)
+    return each_in_threads(one, signals.u_fine, signals.n_periods, starts, known)

@@ -1,0 +1,291 @@
+"""The gap diagnosis of a structure: where the simulator misses the
+measurements, which force law there explains it, and how far the gap closes
+once the connection is simulated.
+
+Three stages, each a module of its own:
+
+1. locate (:class:`~sklearn_pnlss.gap.connections.locator.ConnectionLocator`):
+   every place and force law fitted to the nominal's error by linear least
+   squares, the force read off the measured motion; seconds;
+2. refine (:func:`~sklearn_pnlss.gap.connections.refine.fit_connection`):
+   the laws at the places that explain most, and a linear change at each,
+   simulated to the periodic steady state and fitted by simulation error;
+3. report (:meth:`StructuralGapDiagnosis.report`): the chosen connection and
+   the nominal simulated on validation records, the gap each leaves, and
+   what is left over the noise.
+"""
+from dataclasses import dataclass
+from numbers import Integral, Real
+
+import numpy as np
+from sklearn.base import BaseEstimator
+from sklearn.utils.validation import check_is_fitted
+
+from ...physics.structure import Structure
+from ...utils.parameters import Interval, validates_parameters
+from .locator import ConnectionLocator
+from .refine import BandError, fit_connection
+from .spectra import PeriodSpectra
+
+__all__ = ["StructuralGapDiagnosis", "StructuralGapReport"]
+
+#: A nonlinear law is claimed where its simulation leaves at most this share
+#: of the squared training error a stiffness and damping change at the same
+#: place leaves: less is a nominal's linear error that a nonlinear element
+#: absorbs in part (measured on a linear chain: see the tests).
+MAX_ERROR_RATIO = 0.7
+
+
+@dataclass(frozen=True)
+class StructuralGapReport:
+    """The diagnosis read on validation records.
+
+    Attributes
+    ----------
+    effect_found : bool
+        Whether a nonlinear connection explains the gap (see
+        ``MAX_ERROR_RATIO``).
+    place : tuple of (str, str or None)
+        Where the chosen connection acts (the second point None: the ground).
+    law : str
+        Its force law.
+    parameters : dict
+        Its physical parameters.
+    nominal_error, connection_error, linear_error : ndarray of shape (n_signals,)
+        Each validation record's rms simulation error over its rms output in
+        the band (outputs weighted by their noise): of the nominal, with the
+        connection, and with a linear change at the same place.
+    nominal_nrmse, connection_nrmse : ndarray of shape (n_signals, n_outputs)
+        The same per output, unweighted.
+    closure : ndarray of shape (n_signals,)
+        Share of the nominal's squared error the connection removes.
+    left_over_noise_db : ndarray of shape (n_signals,)
+        What the connection leaves, in dB over the records' noise (0 dB:
+        nothing but noise is left).
+    ranking : list of ConnectionCandidate
+        The locator's places, most explaining first.
+    """
+
+    effect_found: bool
+    place: tuple
+    law: str
+    parameters: dict
+    nominal_error: np.ndarray
+    connection_error: np.ndarray
+    linear_error: np.ndarray
+    nominal_nrmse: np.ndarray
+    connection_nrmse: np.ndarray
+    closure: np.ndarray
+    left_over_noise_db: np.ndarray
+    ranking: list
+
+    @property
+    def place_name(self):
+        a, b = self.place
+        return f"{a} and {'the ground' if b is None else b}"
+
+    def __str__(self):
+        head = (f"{self.law} between {self.place_name}" if self.effect_found else
+                f"no nonlinear connection explains the gap (best tried: {self.law} between {self.place_name})")
+        lines = [head + f", closing {np.mean(self.closure):.0%} of the nominal's squared error on the "
+                 f"validation records on average"]
+        for i, (e0, e1, el, c, n) in enumerate(zip(self.nominal_error, self.connection_error, self.linear_error,
+                                                   self.closure, self.left_over_noise_db)):
+            lines.append(f"  record {i}: error {e0:.3f} -> {e1:.3f} of the output (closes {c:.0%}; a linear "
+                         f"change there: {el:.3f}), {n:.0f} dB over the noise left")
+        lines.append("  places by the share of the training error their force explains: " + ", ".join(
+            f"{c.place_name} {c.explained:.0%}" for c in self.ranking))
+        return "\n".join(lines)
+
+
+class StructuralGapDiagnosis(BaseEstimator):
+    """Diagnose the gap between a structure's simulator and measured
+    periodic records: the place, the force law and how far it closes.
+
+    The nominal's error is first read connection by connection
+    (:class:`~sklearn_pnlss.gap.connections.locator.ConnectionLocator`,
+    no simulation); at the ``n_places`` places whose force explains most,
+    every force law, and a linear stiffness and damping change, are then
+    simulated and fitted by simulation error on the training records; the
+    law that leaves the least error is the diagnosis when it beats the
+    linear change clearly (``MAX_ERROR_RATIO``).
+
+    Parameters
+    ----------
+    nominal : Structure
+        The linear simulator (e.g. :func:`~sklearn_pnlss.gap.modal_nominal`
+        of the lowest level).
+    fs : float
+        Sampling rate, Hz.
+    period : int
+        Samples per period of the records (each two periods or more).
+    inputs : sequence of str
+        Points of the input forces, one per column of ``X``.
+    sensors : sequence of (str, str)
+        ``(point, kind)`` of each column of ``y``.
+    places, laws : sequence, default=None
+        As :class:`ConnectionLocator` (None: all).
+    f_band : (float, float), default=None
+        Band of the error, Hz (None: the excited lines).
+    n_places : int, default=2
+        Places whose laws are simulated.
+    oversampling : int, default=5
+        Integration rate over the data rate.
+    max_nfev : int, default=15
+        Evaluations of each law's least squares at most.
+    transient_periods : int, default=0
+        Periods left out at the start of each record.
+
+    Attributes
+    ----------
+    locator_ : ConnectionLocator
+    fits_ : list of ConnectionFit
+        Every simulated law, least training error first.
+    best_ : ConnectionFit
+        The nonlinear law that leaves the least training error.
+    linear_ : dict
+        The linear change fitted at each simulated place (a ConnectionFit).
+    effect_found_ : bool
+    nominal_train_error_ : ndarray of shape (n_signals,)
+
+    Examples
+    --------
+    A dry friction between two masses of a chain, found from three
+    accelerometers and two levels:
+
+    >>> import numpy as np
+    >>> from sklearn_pnlss.gap.connections import StructuralGapDiagnosis
+    >>> from sklearn_pnlss.physics import Connection, CoulombFriction, Structure
+    >>> points = ["base", "middle", "tip"]
+    >>> M, K = np.diag([3.0, 2.0, 1.0]), 5e4 * np.array([[2.0, -1, 0], [-1, 2, -1], [0, -1, 1]])
+    >>> C = 1e-4 * K + 0.5 * M
+    >>> truth = Structure(M, C, K, points=points,
+    ...                   connections=[Connection(CoulombFriction(2.0, 1e-3), "middle", "tip")])
+    >>> sensors = [(p, "acceleration") for p in points]
+    >>> rng = np.random.default_rng(0)
+    >>> def records(levels):
+    ...     X, Y = [], []
+    ...     for level in levels:
+    ...         spectrum = np.zeros(2049, complex)
+    ...         spectrum[10:850:2] = np.exp(2j * np.pi * rng.random(420))
+    ...         u = np.fft.irfft(spectrum)
+    ...         u *= level / u.std()
+    ...         a = truth.simulate(u, fs=200.0, inputs="base", sensors=sensors, periodic=True,
+    ...                            oversampling=20, decimation=(4, 5))
+    ...         X.append(np.tile(u, 2)[:, None])
+    ...         Y.append(np.tile(a, (2, 1)) + 1e-3 * a.std(0) * rng.standard_normal((8192, 3)))
+    ...     return X, Y
+    >>> X, Y = records([10.0, 30.0])
+    >>> gap = StructuralGapDiagnosis(Structure(M, C, K, points=points), fs=200.0, period=4096,
+    ...                              inputs=["base"], sensors=sensors, n_places=1,
+    ...                              laws=["cubic_stiffness", "coulomb_friction"]).fit(X, Y)
+    >>> report = gap.report(*records([20.0]))
+    >>> report.effect_found, report.place, report.law
+    (True, ('middle', 'tip'), 'coulomb_friction')
+    >>> bool(report.closure[0] > 0.99), round(report.parameters["fc"], 1)
+    (True, 2.1)
+    """
+
+    _parameter_constraints = {
+        "nominal": [Structure],
+        "fs": [Interval(Real, 0, None, closed="neither")],
+        "period": [Interval(Integral, 16, None, closed="left")],
+        "inputs": [list, tuple],
+        "sensors": [list, tuple],
+        "places": [list, tuple, None],
+        "laws": [list, tuple, None],
+        "f_band": [tuple, list, None],
+        "n_places": [Interval(Integral, 1, None, closed="left")],
+        "oversampling": [Interval(Integral, 1, None, closed="left")],
+        "max_nfev": [Interval(Integral, 1, None, closed="left")],
+        "transient_periods": [Interval(Integral, 0, None, closed="left")],
+    }
+
+    def __init__(self, nominal, *, fs, period, inputs, sensors, places=None, laws=None, f_band=None, n_places=2,
+                 oversampling=5, max_nfev=15, transient_periods=0):
+        self.nominal = nominal
+        self.fs = fs
+        self.period = period
+        self.inputs = inputs
+        self.sensors = sensors
+        self.places = places
+        self.laws = laws
+        self.f_band = f_band
+        self.n_places = n_places
+        self.oversampling = oversampling
+        self.max_nfev = max_nfev
+        self.transient_periods = transient_periods
+
+    @validates_parameters
+    def fit(self, X, y):
+        """Locate, then simulate and fit the laws at the leading places.
+
+        Parameters
+        ----------
+        X : signals, (n_signals, n_samples, n_inputs) or a list
+        y : signals, (n_signals, n_samples, n_sensors) or a list
+
+        Returns
+        -------
+        self : StructuralGapDiagnosis
+        """
+        self.locator_ = ConnectionLocator(self.nominal, fs=self.fs, period=self.period, inputs=self.inputs,
+                                          sensors=self.sensors, places=self.places, laws=self.laws,
+                                          f_band=self.f_band, transient_periods=self.transient_periods).fit(X, y)
+        error = self._band_error(X, y, self.oversampling)
+        self.nominal_train_error_ = error.relative(error.simulate(self.nominal))
+        places = list(dict.fromkeys(c.place for c in self.locator_.ranking_))[:self.n_places]
+        fits, self.linear_ = [], {}
+        for place in places:
+            scales = self.locator_.rms_[place]
+            self.linear_[place] = fit_connection(self.nominal, self.locator_.linear_[place], error, scales=scales,
+                                                 max_nfev=self.max_nfev)
+            fits += [fit_connection(self.nominal, c, error, scales=scales, max_nfev=self.max_nfev)
+                     for c in self.locator_.candidates_ if c.place == place]
+        if not fits:  # the laws hold the linear change only
+            fits = list(self.linear_.values())
+        self.fits_ = sorted(fits, key=lambda f: np.mean(f.train_error**2))
+        self.best_ = self.fits_[0]
+        linear = self.linear_[self.best_.place]
+        self.effect_found_ = bool(self.best_.law.element is not None and np.mean(self.best_.train_error**2)
+                                  <= MAX_ERROR_RATIO * np.mean(linear.train_error**2))
+        return self
+
+    def _band_error(self, X, y, oversampling):
+        spectra = PeriodSpectra.from_signals(X, y, period=self.period, fs=self.fs,
+                                             transient_periods=self.transient_periods)
+        return BandError(spectra, self.locator_.lines_, self.locator_.output_weights_, self.inputs, self.sensors,
+                         oversampling)
+
+    def report(self, X, y):
+        """The diagnosis on validation records.
+
+        Parameters
+        ----------
+        X, y : signals
+            Periodic records, as in :meth:`fit`.
+
+        Returns
+        -------
+        StructuralGapReport
+        """
+        check_is_fitted(self, "best_")
+        error = self._band_error(X, y, self.oversampling)
+        nominal = error.simulate(self.nominal)
+        connection = error.simulate(self.best_.structure)
+        linear = error.simulate(self.linear_[self.best_.place].structure)
+        e0, e1 = error.relative(nominal), error.relative(connection)
+        noise = np.sum(error.spectra.Y_noise[:, error.lines] * error.weights**2, axis=(1, 2))
+        left = np.sum(np.abs(connection - error.measured) ** 2, axis=(1, 2))
+        return StructuralGapReport(
+            effect_found=self.effect_found_, place=self.best_.place, law=self.best_.law.name,
+            parameters=dict(self.best_.parameters), nominal_error=e0, connection_error=e1,
+            linear_error=error.relative(linear), nominal_nrmse=_per_output(nominal, error.measured),
+            connection_nrmse=_per_output(connection, error.measured), closure=1.0 - e1**2 / e0**2,
+            left_over_noise_db=10 * np.log10(left / noise), ranking=list(self.locator_.ranking_))
+
+
+def _per_output(simulated, measured):
+    """Rms error over rms output at the band's lines, per record and output
+    (weights cancel)."""
+    return np.sqrt(np.sum(np.abs(simulated - measured) ** 2, axis=1) / np.sum(np.abs(measured) ** 2, axis=1))

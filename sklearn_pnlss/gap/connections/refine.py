@@ -1,0 +1,205 @@
+"""A located connection fitted by simulation: the structure with its force
+law at its place, run to the periodic steady state of every training
+record, its parameters refined on the simulation error.
+
+The locator's coefficients come from the measured motion; simulated, the
+connection moves the structure itself, and only a simulation says how far
+the gap closes.  The error is read where the locator reads it: the lines
+of the band, each output weighted by its noise.
+"""
+import time
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from ...physics.resampling import decimate_columns, upsample_fft
+from ...physics.structure import Connection
+from ...utils.threads import each_in_threads
+from ..fitting.simulate import prime_factors
+
+__all__ = ["BandError", "ConnectionFit", "connected", "fit_connection"]
+
+#: Residual of a trial point whose simulation diverges, relative to the
+#: records' weighted size: far above any real misfit, so that the trust
+#: region shrinks away from it.
+_PENALTY = 1e3
+
+
+def connected(nominal, place, law, parameters):
+    """The nominal with a force law at a place: its element as a
+    :class:`~sklearn_pnlss.physics.Connection` and its stiffness and
+    damping changes as springs (see :meth:`Structure.with_connections`)."""
+    a, b = place
+    element = law.element_with(parameters)
+    return nominal.with_connections([] if element is None else [Connection(element, a, b)],
+                                    springs=[(a, b, parameters["stiffness"], parameters["damping"])])
+
+
+class BandError:
+    """The weighted error of a structure's steady-state simulation at the
+    band's lines of periodic records.
+
+    Parameters
+    ----------
+    spectra : PeriodSpectra
+    lines : ndarray of int
+        The band's lines.
+    weights : ndarray of shape (n_outputs,)
+        Each output's weight (its noise's inverse rms).
+    inputs, sensors : as :class:`ConnectionLocator`
+    oversampling : int
+        Integration rate over the data rate (decimated by its prime factors).
+    """
+
+    def __init__(self, spectra, lines, weights, inputs, sensors, oversampling):
+        self.spectra, self.lines, self.weights = spectra, lines, weights
+        self.inputs, self.sensors, self.oversampling = list(inputs), list(sensors), int(oversampling)
+        self.u_fine = [np.stack([upsample_fft(np.fft.irfft(U[:, j], spectra.period), oversampling, periodic=True)
+                                 for j in range(U.shape[1])], axis=1) for U in spectra.U]
+        self.measured = spectra.Y[:, lines] * weights
+        self.n_simulations = 0
+        # each record's last steady state: the next trial point's search
+        # starts there (a neighbouring structure's orbit is close to it)
+        self._starts = [None] * len(self.u_fine)
+
+    def simulate(self, structure):
+        """Each record's simulated output spectra at the band's lines,
+        weighted: (n_signals, n_lines, n_outputs); FloatingPointError when a
+        simulation diverges."""
+        fs_fine, decimation = self.spectra.fs * self.oversampling, prime_factors(self.oversampling)
+
+        def one(u_fine, start):
+            if start is not None and start.size != 3 * structure.n_dof + 2 * structure.n_internal_states:
+                start = None
+            with warnings.catch_warnings():
+                # a trial point that does not settle is judged by its misfit
+                warnings.simplefilter("ignore")
+                sim = structure.simulate_fine(u_fine, fs=fs_fine, inputs=self.inputs, periodic=True,
+                                              initial_state=start, warn=False)
+            y = decimate_columns(structure.measure(sim, self.sensors), decimation, periodic=True)
+            return np.fft.rfft(y, axis=0)[self.lines] * self.weights, sim.final_state
+
+        self.n_simulations += 1
+        results = each_in_threads(one, self.u_fine, self._starts)
+        out = np.array([r[0] for r in results])
+        if not np.all(np.isfinite(out)):
+            raise FloatingPointError("the simulation diverged.")
+        self._starts = [r[1] for r in results]
+        return out
+
+    def residuals(self, structure):
+        """Real and imaginary parts of the weighted error, flattened."""
+        size = np.sqrt(np.mean(np.abs(self.measured) ** 2))
+        try:
+            e = (self.simulate(structure) - self.measured).reshape(-1)
+        except (FloatingPointError, ValueError, np.linalg.LinAlgError):
+            e = None
+        if e is None or np.sqrt(np.mean(np.abs(e) ** 2)) > _PENALTY * size:  # running away
+            return np.full(2 * self.measured.size, _PENALTY * size)
+        return np.concatenate([e.real, e.imag])
+
+    def relative(self, simulated):
+        """Each record's rms error over its rms output (weighted outputs)."""
+        return np.sqrt(np.sum(np.abs(simulated - self.measured) ** 2, axis=(1, 2))
+                       / np.sum(np.abs(self.measured) ** 2, axis=(1, 2)))
+
+
+@dataclass(frozen=True)
+class ConnectionFit:
+    """A connection fitted by simulation.
+
+    Attributes
+    ----------
+    candidate : ConnectionCandidate
+        Where it started (the locator's fit).
+    parameters : dict
+        Physical parameters after the fit.
+    structure : Structure
+        The nominal with the connection.
+    train_error : ndarray of shape (n_signals,)
+        Each training record's rms simulation error over its rms output in
+        the band (outputs weighted by their noise).
+    n_simulations : int
+        Simulations of the training set used.
+    seconds : float
+    """
+
+    candidate: object
+    parameters: dict
+    structure: object
+    train_error: np.ndarray
+    n_simulations: int
+    seconds: float
+
+    @property
+    def place(self):
+        return self.candidate.place
+
+    @property
+    def law(self):
+        return self.candidate.law
+
+
+def fit_connection(nominal, candidate, error, *, scales, max_nfev=20):
+    """Refine a located connection's parameters by simulation error.
+
+    Parameters
+    ----------
+    nominal : Structure
+    candidate : ConnectionCandidate
+    error : BandError
+        The training records' error.
+    scales : (float, float)
+        Rms relative displacement and velocity at the place: the size of a
+        stiffness and damping change that matters, where the locator's
+        value is zero.
+    max_nfev : int, default=20
+        Evaluations of the least squares at most (each costs a simulation
+        of the training records, and one per parameter for its Jacobian).
+
+    Returns
+    -------
+    ConnectionFit
+    """
+    start = time.perf_counter()
+    law, p0 = candidate.law, dict(candidate.parameters)
+    names = law.free_names
+    d_rms, v_rms = scales
+    size = float(np.sqrt(np.mean(np.abs(error.measured) ** 2)))
+    # each parameter on the scale of its locator value (a change of its own
+    # size), or of the force it adds at the rms motion where that is zero
+    typical = {"stiffness": 1.0 / d_rms, "damping": 1.0 / v_rms, "gap": d_rms}
+    scale = np.array([abs(p0[n]) if p0[n] != 0 else typical.get(n, 1.0) for n in names])
+    lower = np.full(len(names), -np.inf)
+    if "gap" in names:
+        lower[names.index("gap")] = -p0["gap"] / scale[names.index("gap")]  # a clearance is not negative
+
+    def parameters(theta):
+        return {**p0, **{n: float(p0[n] + t * s) for n, t, s in zip(names, theta, scale)}}
+
+    def fun(theta):
+        return error.residuals(connected(nominal, candidate.place, law, parameters(theta))) / size
+
+    first = error.n_simulations
+    # the locator's coefficients, and its nonlinear element alone: a large
+    # linear change read off the measured motion can make the simulated
+    # structure unstable, where the element alone is not
+    starts = [np.zeros(len(names))]
+    if p0["stiffness"] or p0["damping"]:
+        starts.append(-np.array([n in ("stiffness", "damping") for n in names], float))
+    costs = [np.sum(fun(t) ** 2) for t in starts]
+    theta0 = starts[int(np.argmin(costs))]
+    res = least_squares(fun, theta0, bounds=(lower, np.inf), method="trf", x_scale="jac", diff_step=1e-4,
+                        max_nfev=max_nfev, xtol=1e-6, ftol=1e-6)
+    best = parameters(res.x if np.sum(res.fun**2) < min(costs) else theta0)
+    structure = connected(nominal, candidate.place, law, best)
+    try:
+        train_error = error.relative(error.simulate(structure))
+    except (FloatingPointError, ValueError, np.linalg.LinAlgError):
+        train_error = np.full(error.measured.shape[0], np.inf)
+    if np.any(train_error > _PENALTY):
+        train_error = np.full(error.measured.shape[0], np.inf)  # no stable point was found
+    return ConnectionFit(candidate, best, structure, train_error, error.n_simulations - first,
+                         time.perf_counter() - start)
