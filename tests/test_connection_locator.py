@@ -54,14 +54,17 @@ def test_the_connection_and_its_law_are_found_on_a_chain(element, law, coefficie
     right place and law explain the nominal's error to the noise on the
     training levels and on two new ones, the coefficient within 10 %
     (a backlash's clearance is profiled on a grid of rms multiples, which
-    its stiffness absorbs), every other place explains far less."""
+    its stiffness absorbs); the modal corrections fitted with every law
+    explain the integration's linear error everywhere, and beyond them
+    the right place's law gains twice what any other place's does."""
     X, Y = _records(element, (20.0, 40.0, 60.0))
     loc = _locator().fit(X, Y)
     best = loc.best_
     assert (best.place, best.law.name) == (("middle", "tip"), law)
     assert best.explained > 0.98 and best.nonlinear_gain > 0.1
     assert abs(best.parameters[coefficient] / truth - 1) < 0.1
-    assert loc.ranking_[1].explained < best.explained - 0.1
+    assert loc.ranking_[1].explained < best.explained - 0.05
+    assert best.nonlinear_gain > 2 * max(c.nonlinear_gain for c in loc.ranking_[1:])
     X_val, Y_val = _records(element, (30.0, 50.0), seed=1)
     assert loc.score(X_val, Y_val) > 0.95
 
@@ -108,10 +111,12 @@ def test_the_f16s_gap_lies_at_the_wing_and_softens_beyond_a_clearance(f16_dir):
     """The F-16 (real data), nominal read off level 1 in 2-15 Hz, trained on
     levels 1, 3, 5, 7: the connection that explains most of the nominal's
     error acts at the wing sensor (to the ground, as these three sensors
-    resolve it) and softens beyond a clearance; with its coefficients fixed
-    it explains at least 90 % of the error on validation levels 4 and 6.
-    The wing-payload pair explains little, though their relative motion
-    is measured (above 20 dB of its noise at 77-86 % of the band's lines):
+    resolve it) and softens beyond a clearance, 3 % and more beyond a
+    linear change there with the modal corrections; with its coefficients
+    fixed it explains at least 90 % of the error on validation levels 4 and
+    6 and 60 % on level 2.
+    A law between the wing and the payload gains less than half as much,
+    though their relative motion is measured (above 20 dB of its noise at 77-86 % of the band's lines):
     a nominal read from one shaker position knows the interface only
     through the global modes, not its own flexibility (see the guide)."""
     points = ["drive", "wing", "payload"]
@@ -124,8 +129,8 @@ def test_the_f16s_gap_lies_at_the_wing_and_softens_beyond_a_clearance(f16_dir):
     loc.fit([data[k].X[0] for k in (1, 3, 5, 7)], [data[k].y[0] for k in (1, 3, 5, 7)])
     best = loc.best_
     assert best.place == ("wing", None) and best.law.name == "backlash"
-    assert best.parameters["kb"] < 0 and best.explained > 0.85 and best.nonlinear_gain > 0.1
-    nominal_error, explained = loc.explained([data[k].X[0] for k in (4, 6)], [data[k].y[0] for k in (4, 6)])
-    assert np.all(nominal_error > 1.0) and np.all(explained > 0.9)
+    assert best.parameters["kb"] < 0 and best.explained > 0.9 and best.nonlinear_gain > 0.03
+    nominal_error, explained = loc.explained([data[k].X[0] for k in (2, 4, 6)], [data[k].y[0] for k in (2, 4, 6)])
+    assert np.all(nominal_error[1:] > 1.0) and np.all(explained[1:] > 0.9) and explained[0] > 0.6
     pair = next(c for c in loc.ranking_ if c.place == ("wing", "payload"))
-    assert pair.explained < 0.3
+    assert pair.nonlinear_gain < 0.5 * best.nonlinear_gain

@@ -23,7 +23,8 @@ from sklearn.utils.validation import check_is_fitted
 
 from ...physics.structure import Structure
 from ...utils.parameters import Interval, validates_parameters
-from .locator import ConnectionLocator
+from .locator import ConnectionLocator, band_and_weights
+from .recalibrate import recalibrated
 from .refine import BandError, fit_connection
 from .spectra import PeriodSpectra
 
@@ -34,6 +35,11 @@ __all__ = ["StructuralGapDiagnosis", "StructuralGapReport"]
 #: place leaves: less is a nominal's linear error that a nonlinear element
 #: absorbs in part (measured on a linear chain: see the tests).
 MAX_ERROR_RATIO = 0.7
+#: The locator is run again around its leader's modal corrections, made
+#: exactly, until they are below this (a log-factor: 1 % on a frequency, a
+#: damping ratio or a shape's scale), at most this many times: a nominal
+#: 10-30 % off is beyond a first-order correction.
+CORRECTION_TOL, CORRECTION_ROUNDS = 0.01, 4
 
 
 @dataclass(frozen=True)
@@ -51,14 +57,16 @@ class StructuralGapReport:
         Its force law.
     parameters : dict
         Its physical parameters.
-    nominal_error, connection_error, linear_error : ndarray of shape (n_signals,)
+    nominal_error, recalibrated_error, connection_error, linear_error : ndarray of shape (n_signals,)
         Each validation record's rms simulation error over its rms output in
-        the band (outputs weighted by their noise): of the nominal, with the
-        connection, and with a linear change at the same place.
+        the band (outputs weighted by their noise): of the given nominal, of
+        the recalibrated one, with the connection, and with a linear change
+        at the same place instead.
     nominal_nrmse, connection_nrmse : ndarray of shape (n_signals, n_outputs)
         The same per output, unweighted.
     closure : ndarray of shape (n_signals,)
-        Share of the nominal's squared error the connection removes.
+        Share of the given nominal's squared error that the recalibrated
+        nominal with the connection removes.
     left_over_noise_db : ndarray of shape (n_signals,)
         What the connection leaves, in dB over the records' noise (0 dB:
         nothing but noise is left).
@@ -71,6 +79,7 @@ class StructuralGapReport:
     law: str
     parameters: dict
     nominal_error: np.ndarray
+    recalibrated_error: np.ndarray
     connection_error: np.ndarray
     linear_error: np.ndarray
     nominal_nrmse: np.ndarray
@@ -89,10 +98,12 @@ class StructuralGapReport:
                 f"no nonlinear connection explains the gap (best tried: {self.law} between {self.place_name})")
         lines = [head + f", closing {np.mean(self.closure):.0%} of the nominal's squared error on the "
                  f"validation records on average"]
-        for i, (e0, e1, el, c, n) in enumerate(zip(self.nominal_error, self.connection_error, self.linear_error,
-                                                   self.closure, self.left_over_noise_db)):
-            lines.append(f"  record {i}: error {e0:.3f} -> {e1:.3f} of the output (closes {c:.0%}; a linear "
-                         f"change there: {el:.3f}), {n:.0f} dB over the noise left")
+        for i, (e0, er, e1, el, c, n) in enumerate(zip(self.nominal_error, self.recalibrated_error,
+                                                       self.connection_error, self.linear_error, self.closure,
+                                                       self.left_over_noise_db)):
+            lines.append(f"  record {i}: error {e0:.3f} -> {e1:.3f} of the output (closes {c:.0%}; the "
+                         f"recalibrated nominal: {er:.3f}, with a linear change there instead: {el:.3f}), "
+                         f"{n:.0f} dB over the noise left")
         lines.append("  places by the share of the training error their force explains: " + ", ".join(
             f"{c.place_name} {c.explained:.0%}" for c in self.ranking))
         return "\n".join(lines)
@@ -135,9 +146,18 @@ class StructuralGapDiagnosis(BaseEstimator):
         Evaluations of each law's least squares at most.
     transient_periods : int, default=0
         Periods left out at the start of each record.
+    recalibrate : bool, default=False
+        Refit the nominal's in-band modes (frequency, damping ratio, shape
+        scale) to the best linear approximation of the training records
+        first (see :mod:`~sklearn_pnlss.gap.connections.recalibrate`).
+        Without it the modes are corrected with every law, around the
+        nominal, which is read again around the leader's corrections until
+        they are small (``CORRECTION_TOL``).
 
     Attributes
     ----------
+    nominal_ : Structure
+        The nominal the connections are added to (recalibrated or given).
     locator_ : ConnectionLocator
     fits_ : list of ConnectionFit
         Every simulated law, least training error first.
@@ -146,7 +166,9 @@ class StructuralGapDiagnosis(BaseEstimator):
     linear_ : dict
         The linear change fitted at each simulated place (a ConnectionFit).
     effect_found_ : bool
-    nominal_train_error_ : ndarray of shape (n_signals,)
+    nominal_train_error_, recalibrated_train_error_ : ndarray of shape (n_signals,)
+        The given and the recalibrated nominal's training errors (rms over
+        the rms output in the band, outputs weighted by their noise).
 
     Examples
     --------
@@ -199,10 +221,11 @@ class StructuralGapDiagnosis(BaseEstimator):
         "oversampling": [Interval(Integral, 1, None, closed="left")],
         "max_nfev": [Interval(Integral, 1, None, closed="left")],
         "transient_periods": [Interval(Integral, 0, None, closed="left")],
+        "recalibrate": ["boolean"],
     }
 
     def __init__(self, nominal, *, fs, period, inputs, sensors, places=None, laws=None, f_band=None, n_places=2,
-                 oversampling=5, max_nfev=15, transient_periods=0):
+                 oversampling=5, max_nfev=15, transient_periods=0, recalibrate=False):
         self.nominal = nominal
         self.fs = fs
         self.period = period
@@ -215,6 +238,7 @@ class StructuralGapDiagnosis(BaseEstimator):
         self.oversampling = oversampling
         self.max_nfev = max_nfev
         self.transient_periods = transient_periods
+        self.recalibrate = recalibrate
 
     @validates_parameters
     def fit(self, X, y):
@@ -229,19 +253,33 @@ class StructuralGapDiagnosis(BaseEstimator):
         -------
         self : StructuralGapDiagnosis
         """
-        self.locator_ = ConnectionLocator(self.nominal, fs=self.fs, period=self.period, inputs=self.inputs,
-                                          sensors=self.sensors, places=self.places, laws=self.laws,
-                                          f_band=self.f_band, transient_periods=self.transient_periods).fit(X, y)
+        spectra = PeriodSpectra.from_signals(X, y, period=self.period, fs=self.fs,
+                                             transient_periods=self.transient_periods)
+        self.nominal_ = self.nominal
+        if self.recalibrate:
+            self.nominal_ = self._recalibrated(spectra)
+        for _ in range(CORRECTION_ROUNDS):
+            self.locator_ = ConnectionLocator(self.nominal_, fs=self.fs, period=self.period, inputs=self.inputs,
+                                              sensors=self.sensors, places=self.places, laws=self.laws,
+                                              f_band=self.f_band, transient_periods=self.transient_periods).fit(X, y)
+            corrections = self.locator_.best_.corrections
+            if corrections is None or np.max(np.abs(corrections), initial=0.0) < CORRECTION_TOL:
+                break
+            # the modal corrections are first-order: made exactly, the
+            # nominal is read again around them (Gauss-Newton on the modes)
+            self.nominal_ = self.locator_.nominal_for(self.locator_.best_)
         error = self._band_error(X, y, self.oversampling)
         self.nominal_train_error_ = error.relative(error.simulate(self.nominal))
+        self.recalibrated_train_error_ = error.relative(error.simulate(self.nominal_))
         places = list(dict.fromkeys(c.place for c in self.locator_.ranking_))[:self.n_places]
         fits, self.linear_ = [], {}
         for place in places:
             scales = self.locator_.rms_[place]
-            self.linear_[place] = fit_connection(self.nominal, self.locator_.linear_[place], error, scales=scales,
-                                                 max_nfev=self.max_nfev)
-            fits += [fit_connection(self.nominal, c, error, scales=scales, max_nfev=self.max_nfev)
-                     for c in self.locator_.candidates_ if c.place == place]
+            located = [self.locator_.linear_[place]] + [c for c in self.locator_.candidates_ if c.place == place]
+            linear, *nonlinear = [fit_connection(self.locator_.nominal_for(c), c, error, scales=scales,
+                                                 max_nfev=self.max_nfev) for c in located]
+            self.linear_[place] = linear
+            fits += nonlinear
         if not fits:  # the laws hold the linear change only
             fits = list(self.linear_.values())
         self.fits_ = sorted(fits, key=lambda f: np.mean(f.train_error**2))
@@ -250,6 +288,21 @@ class StructuralGapDiagnosis(BaseEstimator):
         self.effect_found_ = bool(self.best_.law.element is not None and np.mean(self.best_.train_error**2)
                                   <= MAX_ERROR_RATIO * np.mean(linear.train_error**2))
         return self
+
+    def _recalibrated(self, spectra):
+        """The nominal's in-band modes refitted to the best linear
+        approximation of all training records (see
+        :mod:`~sklearn_pnlss.gap.connections.recalibrate`)."""
+        if spectra.U.shape[2] != 1:
+            raise ValueError("recalibrate=True reads the frequency response of one input force; with "
+                             f"{spectra.U.shape[2]} inputs pass recalibrate=False.")
+        lines, weights = band_and_weights(spectra, self.f_band)
+        U, Y = spectra.U[:, lines, 0], spectra.Y[:, lines]
+        power = np.sum(np.abs(U) ** 2, axis=0)
+        excited = power > 1e-6 * power.max()
+        frf = np.sum(Y[:, excited] * U[:, excited, None].conj(), axis=0) / power[excited, None]
+        return recalibrated(self.nominal, spectra.freqs[lines][excited], frf[:, :, None], weights,
+                            inputs=self.inputs, sensors=self.sensors)
 
     def _band_error(self, X, y, oversampling):
         spectra = PeriodSpectra.from_signals(X, y, period=self.period, fs=self.fs,
@@ -271,18 +324,27 @@ class StructuralGapDiagnosis(BaseEstimator):
         """
         check_is_fitted(self, "best_")
         error = self._band_error(X, y, self.oversampling)
-        nominal = error.simulate(self.nominal)
-        connection = error.simulate(self.best_.structure)
-        linear = error.simulate(self.linear_[self.best_.place].structure)
+        nominal, recalibrated, connection, linear = (_simulated(error, s) for s in (
+            self.nominal, self.nominal_, self.best_.structure, self.linear_[self.best_.place].structure))
         e0, e1 = error.relative(nominal), error.relative(connection)
         noise = np.sum(error.spectra.Y_noise[:, error.lines] * error.weights**2, axis=(1, 2))
         left = np.sum(np.abs(connection - error.measured) ** 2, axis=(1, 2))
         return StructuralGapReport(
             effect_found=self.effect_found_, place=self.best_.place, law=self.best_.law.name,
-            parameters=dict(self.best_.parameters), nominal_error=e0, connection_error=e1,
+            parameters=dict(self.best_.parameters), nominal_error=e0,
+            recalibrated_error=error.relative(recalibrated), connection_error=e1,
             linear_error=error.relative(linear), nominal_nrmse=_per_output(nominal, error.measured),
             connection_nrmse=_per_output(connection, error.measured), closure=1.0 - e1**2 / e0**2,
             left_over_noise_db=10 * np.log10(left / noise), ranking=list(self.locator_.ranking_))
+
+
+def _simulated(error, structure):
+    """The structure's weighted band spectra on the records, infinite where
+    its simulation diverges (a fitted model must not pass for a good one)."""
+    try:
+        return error.simulate(structure)
+    except (FloatingPointError, ValueError, np.linalg.LinAlgError):
+        return np.full(error.measured.shape, np.inf + 0j)
 
 
 def _per_output(simulated, measured):

@@ -40,9 +40,10 @@ from sklearn.utils.validation import check_is_fitted
 from ...physics.structure import SENSOR_KINDS, Structure
 from ...utils.parameters import Interval, validates_parameters
 from .laws import LAW_NAMES, force_laws
+from .recalibrate import ModalCorrection
 from .spectra import PeriodSpectra
 
-__all__ = ["ConnectionLocator", "ConnectionCandidate"]
+__all__ = ["ConnectionLocator", "ConnectionCandidate", "band_and_weights"]
 
 #: A line of the relative motion is used where its power is this many times
 #: its noise variance (20 dB): below it the double integration hands the
@@ -77,6 +78,9 @@ class ConnectionCandidate:
         training records that the connection's force explains.
     linear_explained : float
         The share a stiffness and damping change at the same place explains.
+    corrections : ndarray or None
+        The nominal's modal corrections fitted with the law (see
+        :class:`~sklearn_pnlss.gap.connections.recalibrate.ModalCorrection`).
     """
 
     place: tuple
@@ -85,6 +89,7 @@ class ConnectionCandidate:
     parameters: dict
     explained: float
     linear_explained: float = None
+    corrections: np.ndarray = None
 
     @property
     def nonlinear_gain(self):
@@ -110,6 +115,26 @@ class _PlaceData:
     response: np.ndarray  # H_c: (n_lines, n_outputs)
     displacement: list = field(default_factory=list)  # per record, at ALIAS_FACTOR x the rate
     velocity: list = field(default_factory=list)
+
+
+def band_and_weights(spectra, f_band):
+    """The lines of the band (``f_band``, Hz, or the excited lines' span)
+    and each output's weight, the inverse rms of its noise there."""
+    freqs = spectra.freqs
+    if f_band is None:
+        power = np.sum(np.abs(spectra.U) ** 2, axis=(0, 2))
+        excited = np.flatnonzero(power > 1e-6 * power.max())
+        excited = excited[excited > 0]
+        lo, hi = freqs[excited.min()], freqs[excited.max()]
+    else:
+        lo, hi = f_band
+    lines = np.flatnonzero((freqs >= lo) & (freqs <= hi) & (freqs > 0))
+    if lines.size < 4:
+        raise ValueError(f"f_band={f_band!r} holds {lines.size} lines of the spectrum; widen it.")
+    noise = spectra.Y_noise[:, lines].mean(axis=(0, 1))
+    power = np.mean(np.abs(spectra.Y[:, lines]) ** 2, axis=(0, 1))
+    # noise-free records (a simulation) weigh outputs by their size
+    return lines, 1.0 / np.sqrt(np.maximum(noise, NOISE_FLOOR * power))
 
 
 class ConnectionLocator(BaseEstimator):
@@ -150,6 +175,11 @@ class ConnectionLocator(BaseEstimator):
         the lines the input excites.
     transient_periods : int, default=0
         Periods at the start of each record left out.
+    modal_corrections : bool, default=True
+        Fit small changes of the nominal's in-band modes (frequency,
+        damping ratio, shape scale; the same at every level) with every
+        law: the nominal's own linear error, which a law fitted alone
+        absorbs in part.
 
     Attributes
     ----------
@@ -211,10 +241,11 @@ class ConnectionLocator(BaseEstimator):
         "laws": [list, tuple, None],
         "f_band": [tuple, list, None],
         "transient_periods": [Interval(Integral, 0, None, closed="left")],
+        "modal_corrections": ["boolean"],
     }
 
     def __init__(self, nominal, *, fs, period, inputs, sensors, places=None, laws=None, f_band=None,
-                 transient_periods=0):
+                 transient_periods=0, modal_corrections=True):
         self.nominal = nominal
         self.fs = fs
         self.period = period
@@ -224,6 +255,7 @@ class ConnectionLocator(BaseEstimator):
         self.laws = laws
         self.f_band = f_band
         self.transient_periods = transient_periods
+        self.modal_corrections = modal_corrections
 
     # -- fitting ------------------------------------------------------------
     @validates_parameters
@@ -242,28 +274,29 @@ class ConnectionLocator(BaseEstimator):
         self : ConnectionLocator
         """
         spectra = self._spectra(X, y)
-        self.lines_ = self._band_lines(spectra)
+        self.lines_, self.output_weights_ = band_and_weights(spectra, self.f_band)
         freqs = spectra.freqs[self.lines_]
         self.input_response_ = self.nominal.frequency_response(freqs, inputs=list(self.inputs),
                                                                sensors=list(self.sensors))
-        noise = spectra.Y_noise[:, self.lines_].mean(axis=(0, 1))
-        power = np.mean(np.abs(spectra.Y[:, self.lines_]) ** 2, axis=(0, 1))
-        # noise-free records (a simulation) weigh outputs by their size
-        self.output_weights_ = 1.0 / np.sqrt(np.maximum(noise, NOISE_FLOOR * power))
+        self.correction_ = (ModalCorrection(self.nominal, freqs, inputs=self.inputs, sensors=self.sensors)
+                            if self.modal_corrections else None)
         error = self._weighted_error(spectra)
         self.nominal_error_ = np.sqrt(np.sum(np.abs(error) ** 2, axis=(1, 2)) / np.sum(
             np.abs(spectra.Y[:, self.lines_] * self.output_weights_) ** 2, axis=(1, 2)))
         self.places_ = self._places()
         self.rms_ = {}
         ranking, self.linear_, self.candidates_ = [], {}, []
+        corrections = None
+        if self.correction_ is not None and self.correction_.n_params:
+            corrections = [self._correction_columns(spectra, i) for i in range(error.shape[0])]
         for place in self.places_:
             data = self._place_data(place, spectra, freqs)
             d_rms = np.sqrt(np.mean(np.concatenate(data.displacement) ** 2))
             v_rms = np.sqrt(np.mean(np.concatenate(data.velocity) ** 2))
             self.rms_[place] = (d_rms, v_rms)
             linear = self.linear_[place] = self._fit_law(force_laws(["linear"], d_rms, v_rms)[0], place, data,
-                                                         error)
-            fits = [replace(self._fit_law(law, place, data, error), linear_explained=linear.explained)
+                                                         error, corrections)
+            fits = [replace(self._fit_law(law, place, data, error, corrections), linear_explained=linear.explained)
                     for law in force_laws(self.laws or LAW_NAMES, d_rms, v_rms) if law.element is not None]
             ranking.append(max(fits, key=lambda c: c.explained) if fits else linear)
             for name in dict.fromkeys(c.law.name for c in fits):  # a backlash's best clearance
@@ -283,20 +316,6 @@ class ConnectionLocator(BaseEstimator):
             raise ValueError(f"y has {spectra.Y.shape[2]} channel(s) but sensors names {len(self.sensors)}: "
                              "one (point, kind) per column of y.")
         return spectra
-
-    def _band_lines(self, spectra):
-        freqs = spectra.freqs
-        if self.f_band is None:
-            power = np.sum(np.abs(spectra.U) ** 2, axis=(0, 2))
-            excited = np.flatnonzero(power > 1e-6 * power.max())
-            excited = excited[excited > 0]
-            lo, hi = freqs[excited.min()], freqs[excited.max()]
-        else:
-            lo, hi = self.f_band
-        lines = np.flatnonzero((freqs >= lo) & (freqs <= hi) & (freqs > 0))
-        if lines.size < 4:
-            raise ValueError(f"f_band={self.f_band!r} holds {lines.size} lines of the spectrum; widen it.")
-        return lines
 
     def _places(self):
         sensed = list(dict.fromkeys(point for point, _ in self.sensors))
@@ -358,15 +377,34 @@ class ConnectionLocator(BaseEstimator):
         cols = -data.response[:, :, None] * F[:, None, :] * self.output_weights_[None, :, None]
         return cols.reshape(-1, F.shape[1])
 
-    def _fit_law(self, law, place, data, error):
-        A = np.concatenate([self._columns(law, data, i) for i in range(error.shape[0])])
+    def _correction_columns(self, spectra, index):
+        """The modal corrections' design columns of record ``index``,
+        weighted like the error (n_lines * n_outputs, n_params)."""
+        cols = self.correction_.columns(spectra.U[index, self.lines_]) * self.output_weights_[None, :, None]
+        return cols.reshape(-1, self.correction_.n_params)
+
+    def _fit_law(self, law, place, data, error, corrections):
+        """The law's coefficients, and the modal corrections with them (the
+        columns ``corrections`` of each record, or None)."""
+        n = error.shape[0]
+        A = np.concatenate([self._columns(law, data, i) if corrections is None else
+                            np.hstack([self._columns(law, data, i), corrections[i]]) for i in range(n)])
         b = error.reshape(-1)
         A2, b2 = np.concatenate([A.real, A.imag]), np.concatenate([b.real, b.imag])
         scale = np.linalg.norm(A2, axis=0)
         scale[scale == 0] = 1.0
         coef = np.linalg.lstsq(A2 / scale, b2, rcond=None)[0] / scale
         explained = 1.0 - np.sum((b2 - A2 @ coef) ** 2) / np.sum(b2**2)
-        return ConnectionCandidate(place, law, coef, law.parameters(coef), float(explained))
+        n_law = len(law.param_names)
+        return ConnectionCandidate(place, law, coef[:n_law], law.parameters(coef[:n_law]), float(explained),
+                                   corrections=None if corrections is None else coef[n_law:])
+
+    def nominal_for(self, candidate):
+        """The nominal with a candidate's modal corrections made (the
+        nominal itself without them)."""
+        if candidate.corrections is None or self.correction_ is None:
+            return self.nominal
+        return self.correction_.applied(candidate.corrections)
 
     # -- reading new records -------------------------------------------------
     def _energies(self, X, y, candidate):
@@ -380,7 +418,10 @@ class ConnectionLocator(BaseEstimator):
         nominal, left = [], []
         for i, e in enumerate(error.reshape(error.shape[0], -1)):
             nominal.append(np.sum(np.abs(e) ** 2))
-            left.append(np.sum(np.abs(e - self._columns(candidate.law, data, i) @ candidate.coefficients) ** 2))
+            e = e - self._columns(candidate.law, data, i) @ candidate.coefficients
+            if candidate.corrections is not None:
+                e = e - self._correction_columns(spectra, i) @ candidate.corrections
+            left.append(np.sum(np.abs(e) ** 2))
         size = np.sum(np.abs(spectra.Y[:, self.lines_] * self.output_weights_) ** 2, axis=(1, 2))
         return np.array(nominal), np.array(left), size
 
