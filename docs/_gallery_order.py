@@ -15,6 +15,7 @@ ORDER = [
     "plot_dask_search.py",
     "plot_gap_diagnosis.py",
     "plot_f16_gvt.py",
+    "plot_gap_f16.py",
     "plot_field_benchmarks.py",
 ]
 

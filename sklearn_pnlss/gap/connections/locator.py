@@ -52,6 +52,12 @@ __all__ = ["ConnectionLocator", "ConnectionCandidate", "band_and_weights"]
 #: masses explained most, at 20, 30 and 40 dB the right one 99.9 % with
 #: k3 within 1 %).
 MOTION_SNR = 100.0
+#: What a modal correction of one (a factor e on a mode's frequency,
+#: damping or shape scale) costs in the fit, as a share of the nominal's
+#: squared error: nothing next to a correction the records determine, the
+#: bound of one they do not (a mode that no sensor sees went to zero
+#: frequency without it).
+CORRECTION_PRICE = 1e-4
 #: Noise variance an output is credited with at least, relative to its
 #: power in the band (noise-free simulated records).
 NOISE_FLOOR = 1e-12
@@ -278,6 +284,7 @@ class ConnectionLocator(BaseEstimator):
         freqs = spectra.freqs[self.lines_]
         self.input_response_ = self.nominal.frequency_response(freqs, inputs=list(self.inputs),
                                                                sensors=list(self.sensors))
+        self.input_freqs_ = freqs
         self.correction_ = (ModalCorrection(self.nominal, freqs, inputs=self.inputs, sensors=self.sensors)
                             if self.modal_corrections else None)
         error = self._weighted_error(spectra)
@@ -391,11 +398,16 @@ class ConnectionLocator(BaseEstimator):
                             np.hstack([self._columns(law, data, i), corrections[i]]) for i in range(n)])
         b = error.reshape(-1)
         A2, b2 = np.concatenate([A.real, A.imag]), np.concatenate([b.real, b.imag])
-        scale = np.linalg.norm(A2, axis=0)
-        scale[scale == 0] = 1.0
-        coef = np.linalg.lstsq(A2 / scale, b2, rcond=None)[0] / scale
-        explained = 1.0 - np.sum((b2 - A2 @ coef) ** 2) / np.sum(b2**2)
         n_law = len(law.param_names)
+        # a mode the records hardly see would take any correction: each
+        # costs CORRECTION_PRICE of the error's energy per unit (a factor e)
+        prior = np.zeros((A2.shape[1] - n_law, A2.shape[1]))
+        prior[:, n_law:] = np.sqrt(CORRECTION_PRICE * np.sum(b2**2)) * np.eye(prior.shape[0])
+        A_fit, b_fit = np.vstack([A2, prior]), np.concatenate([b2, np.zeros(prior.shape[0])])
+        scale = np.linalg.norm(A_fit, axis=0)
+        scale[scale == 0] = 1.0
+        coef = np.linalg.lstsq(A_fit / scale, b_fit, rcond=None)[0] / scale
+        explained = 1.0 - np.sum((b2 - A2 @ coef) ** 2) / np.sum(b2**2)
         return ConnectionCandidate(place, law, coef[:n_law], law.parameters(coef[:n_law]), float(explained),
                                    corrections=None if corrections is None else coef[n_law:])
 

@@ -17,7 +17,7 @@ from scipy.optimize import least_squares
 from ...physics.resampling import decimate_columns, upsample_fft
 from ...physics.structure import Connection
 from ...utils.threads import each_in_threads
-from ..fitting.simulate import prime_factors
+from ..fitting.simulate import FIT_MAX_PERIODS, prime_factors
 
 __all__ = ["BandError", "ConnectionFit", "connected", "fit_connection"]
 
@@ -77,7 +77,7 @@ class BandError:
                 # a trial point that does not settle is judged by its misfit
                 warnings.simplefilter("ignore")
                 sim = structure.simulate_fine(u_fine, fs=fs_fine, inputs=self.inputs, periodic=True,
-                                              initial_state=start, warn=False)
+                                              initial_state=start, warn=False, max_periods=FIT_MAX_PERIODS)
             y = decimate_columns(structure.measure(sim, self.sensors), decimation, periodic=True)
             return np.fft.rfft(y, axis=0)[self.lines] * self.weights, sim.final_state
 
@@ -142,7 +142,7 @@ class ConnectionFit:
         return self.candidate.law
 
 
-def fit_connection(nominal, candidate, error, *, scales, max_nfev=20):
+def fit_connection(nominal, candidate, error, *, scales, max_nfev=20, correction=None):
     """Refine a located connection's parameters by simulation error.
 
     Parameters
@@ -158,6 +158,10 @@ def fit_connection(nominal, candidate, error, *, scales, max_nfev=20):
     max_nfev : int, default=20
         Evaluations of the least squares at most (each costs a simulation
         of the training records, and one per parameter for its Jacobian).
+    correction : ModalCorrection, default=None
+        Modal corrections of ``nominal`` (built around it) fitted with the
+        connection: the locator's are first-order, and the law's linear
+        part trades against them.
 
     Returns
     -------
@@ -176,25 +180,36 @@ def fit_connection(nominal, candidate, error, *, scales, max_nfev=20):
     if "gap" in names:
         lower[names.index("gap")] = -p0["gap"] / scale[names.index("gap")]  # a clearance is not negative
 
+    n_modal = 0 if correction is None else correction.n_params
+    lower = np.r_[lower, np.full(n_modal, -np.inf)]
+
     def parameters(theta):
         return {**p0, **{n: float(p0[n] + t * s) for n, t, s in zip(names, theta, scale)}}
 
+    def structure_at(theta):
+        base = nominal if not n_modal else correction.applied(theta[len(names):])
+        return connected(base, candidate.place, law, parameters(theta[:len(names)]))
+
     def fun(theta):
-        return error.residuals(connected(nominal, candidate.place, law, parameters(theta))) / size
+        try:
+            structure = structure_at(theta)
+        except ValueError:  # a correction that is not a structure's
+            return np.full(2 * error.measured.size, _PENALTY)
+        return error.residuals(structure) / size
 
     first = error.n_simulations
     # the locator's coefficients, and its nonlinear element alone: a large
     # linear change read off the measured motion can make the simulated
     # structure unstable, where the element alone is not
-    starts = [np.zeros(len(names))]
+    starts = [np.zeros(len(names) + n_modal)]
     if p0["stiffness"] or p0["damping"]:
-        starts.append(-np.array([n in ("stiffness", "damping") for n in names], float))
+        starts.append(-np.array([n in ("stiffness", "damping") for n in names] + [False] * n_modal, float))
     costs = [np.sum(fun(t) ** 2) for t in starts]
     theta0 = starts[int(np.argmin(costs))]
     res = least_squares(fun, theta0, bounds=(lower, np.inf), method="trf", x_scale="jac", diff_step=1e-4,
                         max_nfev=max_nfev, xtol=1e-6, ftol=1e-6)
-    best = parameters(res.x if np.sum(res.fun**2) < min(costs) else theta0)
-    structure = connected(nominal, candidate.place, law, best)
+    theta = res.x if np.sum(res.fun**2) < min(costs) else theta0
+    best, structure = parameters(theta[:len(names)]), structure_at(theta)
     try:
         train_error = error.relative(error.simulate(structure))
     except (FloatingPointError, ValueError, np.linalg.LinAlgError):
