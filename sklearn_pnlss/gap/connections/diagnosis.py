@@ -208,7 +208,7 @@ class StructuralGapDiagnosis(BaseEstimator):
     >>> report.effect_found, report.place, report.law
     (True, ('middle', 'tip'), 'coulomb_friction')
     >>> bool(report.closure[0] > 0.99), round(report.parameters["fc"], 1)
-    (True, 2.1)
+    (True, 2.0)
     """
 
     _parameter_constraints = {
