@@ -377,7 +377,7 @@ ESTIMATORS = sorted(
 )
 
 
-@pytest.mark.parametrize("name", [*ESTIMATORS, "gap.GapDiagnosis"])
+@pytest.mark.parametrize("name", [*ESTIMATORS, "gap.GapDiagnosis", "gap.StructuralGapDiagnosis", "gap.ConnectionLocator"])
 def test_constraints_name_exactly_the_parameters(name):
     """A parameter missing from the dict would go unchecked, and a name in
     the dict that is no parameter would be a typo."""

@@ -88,6 +88,31 @@ def test_modes_and_matrices_give_the_same_records():
     assert np.all(np.max(np.abs(rb - ra), axis=0) <= 1e-9 * np.max(np.abs(ra), axis=0))
 
 
+def test_connections_act_on_the_coupled_modes_only():
+    """A mode that is not coupled (a residual mode of a modal fit) takes the
+    inputs' forces but none of a connection's: a spring between the two
+    points changes the records as if the mode had no shape at them, and the
+    connection's response is the input response of that pair of forces on
+    the coupled modes."""
+    w2, phi = eigh(K, M)
+    zeta = np.diag(phi.T @ C @ phi) / (2 * np.sqrt(w2))
+    f = np.sqrt(w2) / (2 * np.pi)
+    spring = [Connection(DeadZoneSpring(3e4, 0.0), "tip", "base")]
+    sensors = [("base", "acceleration"), ("tip", "acceleration")]
+    half = Structure.from_modes(f, zeta, phi, points=POINTS, coupled=[True, False])
+    freqs = np.array([5.0, 20.0, 40.0])
+    # the first mode's term alone, both sensors' accelerations
+    s = 2j * np.pi * freqs[:, None]
+    expected = phi[:, 0] * (phi[1, 0] - phi[0, 0]) * s**2 / (w2[0] + 2 * zeta[0] * np.sqrt(w2[0]) * s + s**2)
+    np.testing.assert_allclose(half.connection_response(freqs, "tip", "base", sensors=sensors), expected,
+                               rtol=1e-10)
+    u = _two_tones(np.arange(2000) / 10000.0)
+    plain = half.simulate_fine(u, fs=10000.0, inputs="base")
+    joined = half.with_connections(spring).simulate_fine(u, fs=10000.0, inputs="base")
+    np.testing.assert_allclose(joined.y[:, 1], plain.y[:, 1], rtol=0, atol=1e-12 * np.abs(plain.y).max())
+    assert not np.allclose(joined.y[:, 0], plain.y[:, 0])
+
+
 def test_a_periodic_linear_structure_answers_at_its_frequency_response():
     """The periodic steady state of the linear chain, shot from its period
     map (exact from the integrator's sensitivities, so one shot after the

@@ -312,13 +312,15 @@ def modal_nominal(X, y, *, fs, points, driving_point, n_modes="auto", kind="acce
         if reason is not None:
             raise ValueError(f"{reason}: ask for fewer modes (or n_modes='auto') or narrow f_band.")
     shapes = fit.residues / np.sqrt(fit.residues[drive])
-    freqs_all, zeta_all = fit.frequencies, fit.damping_ratios
+    freqs_all, zeta_all, coupled = fit.frequencies, fit.damping_ratios, np.ones(fit.frequencies.size, bool)
     if residual_modes:
         # the residual modes the driving point sees with the right sign
         ok = fit.residual_residues[drive] > 0
         shapes = np.hstack([shapes, fit.residual_residues[:, ok] / np.sqrt(fit.residual_residues[drive, ok])])
         freqs_all = np.r_[freqs_all, fit.residual_frequencies[ok]]
         zeta_all = np.r_[zeta_all, fit.residual_damping_ratios[ok]]
-    structure = Structure.from_modes(freqs_all, zeta_all, shapes, points=points)
+        # seen from the driving point only: no connection acts on them
+        coupled = np.r_[coupled, np.zeros(int(np.sum(ok)), bool)]
+    structure = Structure.from_modes(freqs_all, zeta_all, shapes, points=points, coupled=coupled)
     structure.modal_fit_ = fit
     return structure

@@ -160,11 +160,12 @@ class Structure:
         if len(self.points) != n or len(set(self.points)) != n:
             raise ValueError(f"points must name each of the {n} degrees of freedom once, got {points!r}.")
         self.point_matrix = np.eye(n)
+        self.coupled = np.ones(n, dtype=bool)
         self.connections = tuple(connections)
         self._check_connections()
 
     @classmethod
-    def from_modes(cls, frequencies, damping_ratios, mode_shapes, *, points, connections=()):
+    def from_modes(cls, frequencies, damping_ratios, mode_shapes, *, points, connections=(), coupled=None):
         """A structure given by its modes at the points that matter.
 
         Parameters
@@ -178,6 +179,11 @@ class Structure:
             displacement is ``mode_shapes[p] @ q`` for modal coordinates ``q``.
         points : sequence of str
         connections : sequence of Connection, default=()
+        coupled : array-like of bool of shape (n_modes,), default=None
+            Which modes the connections act on (None: all). A residual
+            mode, which stands for the modes outside a fitted band as the
+            driving point sees them, has no shape at a connection's points:
+            forces enter it at the inputs only.
 
         Returns
         -------
@@ -213,6 +219,9 @@ class Structure:
         out.stiffness = np.diag(omega**2)
         out.points = tuple(points)
         out.point_matrix = shapes
+        out.coupled = np.ones(f.size, dtype=bool) if coupled is None else np.asarray(coupled, dtype=bool)
+        if out.coupled.shape != f.shape:
+            raise ValueError(f"coupled must hold one bool per mode ({f.size}), got {coupled!r}.")
         out.connections = tuple(connections)
         out._check_connections()
         return out
@@ -227,7 +236,7 @@ class Structure:
         self._packed = pack_forces([c.element for c in self.connections])
         self._directions = np.zeros((self.n_dof, len(self.connections)))
         for i, c in enumerate(self.connections):
-            self._directions[:, i] = self._row(c.point) - (0.0 if c.other is None else self._row(c.other))
+            self._directions[:, i] = self.direction(c.point, c.other)
 
     def __repr__(self):
         return f"Structure(n_dof={self.n_dof}, points={self.points!r}, connections={self.connections!r})"
@@ -259,13 +268,13 @@ class Structure:
                [-0.5,  2.5]])
         """
         out = Structure.__new__(Structure)
-        out.mass, out.points, out.point_matrix = self.mass, self.points, self.point_matrix
+        out.mass, out.points, out.point_matrix, out.coupled = self.mass, self.points, self.point_matrix, self.coupled
         out.damping, out.stiffness = self.damping.copy(), self.stiffness.copy()
         for i, (point, other, k, c) in enumerate(springs):
             for p in (point, other):
                 if p is not None and p not in self.points:
                     raise ValueError(f"springs[{i}] names the point {p!r}, which is not one of {self.points}.")
-            d = self._row(point) - (0.0 if other is None else self._row(other))
+            d = self.direction(point, other)
             out.stiffness += float(k) * np.outer(d, d)
             out.damping += float(c) * np.outer(d, d)
         out.connections = self.connections + tuple(connections)
@@ -284,6 +293,30 @@ class Structure:
 
     def _row(self, point):
         return self.point_matrix[self.points.index(point)]
+
+    def direction(self, point, other=None):
+        """The degrees of freedom's share of the relative motion of two
+        points (``other`` None: the ground) that a connection between them
+        acts on: ``phi_point - phi_other`` on the coupled modes."""
+        return (self._row(point) - (0.0 if other is None else self._row(other))) * self.coupled
+
+    def connection_response(self, freqs, point, other, *, sensors):
+        """The sensors' response to a unit pair of forces between two points
+        (``+1`` at ``point``, ``-1`` at ``other``; None: the ground), as a
+        connection there exerts them, connections left out.
+
+        Returns
+        -------
+        H : ndarray of shape (n_freqs, n_sensors), complex
+        """
+        d = self.direction(point, other)
+        rows, powers = self._sensor_rows(sensors)
+        out = []
+        for f in np.atleast_1d(np.asarray(freqs, dtype=np.float64)):
+            s = 2j * np.pi * f
+            q = np.linalg.solve(s * s * self.mass + s * self.damping + self.stiffness, d)
+            out.append((rows * s ** powers[:, None]) @ q)
+        return np.array(out)
 
     def _input_matrix(self, inputs):
         inputs = [inputs] if isinstance(inputs, str) else list(inputs)

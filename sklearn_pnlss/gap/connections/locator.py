@@ -360,9 +360,7 @@ class ConnectionLocator(BaseEstimator):
 
     def _place_data(self, place, spectra, freqs):
         a, b = place
-        response = self.nominal.frequency_response(freqs, inputs=[a] if b is None else [a, b],
-                                                   sensors=list(self.sensors))
-        data = _PlaceData(response[:, :, 0] - (0.0 if b is None else response[:, :, 1]))
+        data = _PlaceData(self.nominal.connection_response(freqs, a, b, sensors=list(self.sensors)))
         D, noise = self._motion(a, spectra)
         if b is not None:
             D_b, noise_b = self._motion(b, spectra)

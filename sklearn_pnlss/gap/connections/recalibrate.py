@@ -39,7 +39,7 @@ def modal_form(structure):
     omega = np.sqrt(w2)
     zeta = np.diag(phi.T @ c @ phi) / (2 * omega)
     return Structure.from_modes(omega / (2 * np.pi), zeta, structure.point_matrix @ phi, points=structure.points,
-                                connections=structure.connections)
+                                connections=structure.connections, coupled=np.ones(omega.size, bool))
 
 
 def _modal_frf(freqs, omega, zeta, shapes_out, shapes_in, powers):
@@ -110,7 +110,7 @@ class ModalCorrection:
         zeta[self.modes] *= np.exp(b)
         shapes[:, self.modes] *= np.exp(c)
         return Structure.from_modes(omega / (2 * np.pi), zeta, shapes, points=self.modal.points,
-                                    connections=self.modal.connections)
+                                    connections=self.modal.connections, coupled=self.modal.coupled)
 
 
 def recalibrated(structure, freqs, frf, weights, *, inputs, sensors):
@@ -162,4 +162,5 @@ def recalibrated(structure, freqs, frf, weights, *, inputs, sensors):
     if np.sum(res.fun**2) >= np.sum(residuals(np.zeros(3 * free.size)) ** 2):
         return modal
     w, z, phi = model(res.x)
-    return Structure.from_modes(w / (2 * np.pi), z, phi, points=modal.points, connections=modal.connections)
+    return Structure.from_modes(w / (2 * np.pi), z, phi, points=modal.points, connections=modal.connections,
+                                coupled=modal.coupled)

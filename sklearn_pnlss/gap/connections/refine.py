@@ -176,12 +176,10 @@ def fit_connection(nominal, candidate, error, *, scales, max_nfev=20, correction
     # size), or of the force it adds at the rms motion where that is zero
     typical = {"stiffness": 1.0 / d_rms, "damping": 1.0 / v_rms, "gap": d_rms}
     scale = np.array([abs(p0[n]) if p0[n] != 0 else typical.get(n, 1.0) for n in names])
-    lower = np.full(len(names), -np.inf)
+    n_modal = 0 if correction is None else correction.n_params
+    lower = np.full(len(names) + n_modal, -np.inf)
     if "gap" in names:
         lower[names.index("gap")] = -p0["gap"] / scale[names.index("gap")]  # a clearance is not negative
-
-    n_modal = 0 if correction is None else correction.n_params
-    lower = np.r_[lower, np.full(n_modal, -np.inf)]
 
     def parameters(theta):
         return {**p0, **{n: float(p0[n] + t * s) for n, t, s in zip(names, theta, scale)}}
