@@ -85,13 +85,17 @@ def test_a_nominal_read_off_the_lowest_level_finds_the_cubic_spring():
 
 def test_a_linear_structure_leaves_only_noise_to_explain():
     """No effect: the nominal's error is the integrator's own (2 % of the
-    output in the band at 20 times the data rate), linear, and no nonlinear
-    law explains more of it than a stiffness and damping change at its
-    place does (a tenth of a percent)."""
+    output in the band at 20 times the data rate), linear: the modal
+    corrections explain it as well as any law does (a real effect's law
+    gains 10 % and more beyond them, above); without them a backlash
+    profiled over its clearance picks up 1-2 % of it."""
     X, Y = _records(None, (20.0, 60.0))
     loc = _locator().fit(X, Y)
     assert np.all(loc.nominal_error_ < 0.025)
-    assert max(c.nonlinear_gain for c in loc.ranking_) < 0.025
+    assert max(c.nonlinear_gain for c in loc.ranking_) < 1e-3
+    plain = ConnectionLocator(Structure(M, C, K, points=POINTS), fs=FS, period=PERIOD, inputs=["base"],
+                              sensors=SENSORS, modal_corrections=False).fit(X, Y)
+    assert max(c.nonlinear_gain for c in plain.ranking_) < 0.025
 
 
 def test_bad_input_is_named():

@@ -63,8 +63,10 @@ def test_a_cubic_spring_is_found_from_a_nominal_read_off_the_lowest_level():
 def test_the_f16s_diagnosis_by_the_benchmark_protocol(f16_dir):
     """The F-16 (real data, ``benchmarks/bench_f16_gap.py``): nominal read
     off level 1, trained on levels 1, 3, 5 and 7: a softening beyond a
-    clearance at the wing sensor, which closes over 90 % of the nominal's
-    squared error on test levels 4 and 6 and a fifth on level 2."""
+    clearance at the payload or the wing sensor (their training errors are
+    within 1 % of each other), which closes over 90 % of the nominal's
+    squared error on test levels 4 and 6 and a fifth on level 2, more than
+    10 dB over the noise left."""
     points = ["drive", "wing", "payload"]
     sensors = [(p, "acceleration") for p in points]
     data = {level: load_f16(f16_dir, level=level, validation_level=None) for level in range(1, 8)}
@@ -74,6 +76,7 @@ def test_the_f16s_diagnosis_by_the_benchmark_protocol(f16_dir):
                                  f_band=(2.0, 15.0)).fit([data[k].X[0] for k in (1, 3, 5, 7)],
                                                          [data[k].y[0] for k in (1, 3, 5, 7)])
     report = gap.report([data[k].X[0] for k in (2, 4, 6)], [data[k].y[0] for k in (2, 4, 6)])
-    assert report.effect_found and report.place == ("wing", None) and report.law == "backlash"
-    assert report.parameters["kb"] < 0
+    assert report.effect_found and report.place in (("wing", None), ("payload", None))
+    assert report.law == "backlash" and report.parameters["kb"] < 0
     assert np.all(report.closure[1:] > 0.9) and report.closure[0] > 0.15
+    assert not report.fully_explained
