@@ -5,7 +5,8 @@ from .verdict.decision import RankedEffect
 from .diagnosis import GapDiagnosis
 from .candidates.effect import EffectTerms
 from .candidates.effects import Effect, Scales, default_effects
-from .connections import ConnectionCandidate, ConnectionLocator, StructuralGapDiagnosis, StructuralGapReport
+from .connections.diagnosis import StructuralGapDiagnosis, StructuralGapReport
+from .connections.locator import ConnectionCandidate, ConnectionLocator
 from .linear_nominal import linear_nominal
 from .modal_nominal import modal_nominal
 from .report import GapReport

@@ -1,9 +1,6 @@
-"""Where in a structure the simulator is wrong: connections between sensed
-points, fitted to the nominal's error (see :class:`ConnectionLocator`)."""
-from .laws import LAW_NAMES, ForceLaw, force_laws
-from .diagnosis import StructuralGapDiagnosis, StructuralGapReport
-from .locator import ConnectionCandidate, ConnectionLocator
-from .refine import ConnectionFit
-from .spectra import PeriodSpectra
-
-__all__ = ["StructuralGapDiagnosis", "StructuralGapReport", "ConnectionFit", "ConnectionLocator", "ConnectionCandidate", "ForceLaw", "force_laws", "LAW_NAMES", "PeriodSpectra"]
+"""The diagnosis of a structure of several degrees of freedom: the spectra
+of periodic records (:mod:`.spectra`), the force laws a connection is tried
+with (:mod:`.laws`), the locator that fits every place and law without
+simulating (:mod:`.locator`), the nominal's modal corrections
+(:mod:`.recalibrate`), the fit of a connection by simulation
+(:mod:`.refine`) and the diagnosis itself (:mod:`.diagnosis`)."""

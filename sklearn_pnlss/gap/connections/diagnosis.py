@@ -190,7 +190,7 @@ class StructuralGapDiagnosis(BaseEstimator):
     accelerometers and two levels:
 
     >>> import numpy as np
-    >>> from sklearn_pnlss.gap.connections import StructuralGapDiagnosis
+    >>> from sklearn_pnlss.gap import StructuralGapDiagnosis
     >>> from sklearn_pnlss.physics import Connection, CoulombFriction, Structure
     >>> points = ["base", "middle", "tip"]
     >>> M, K = np.diag([3.0, 2.0, 1.0]), 5e4 * np.array([[2.0, -1, 0], [-1, 2, -1], [0, -1, 1]])
