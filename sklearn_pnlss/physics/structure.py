@@ -309,14 +309,7 @@ class Structure:
         -------
         H : ndarray of shape (n_freqs, n_sensors), complex
         """
-        d = self.direction(point, other)
-        rows, powers = self._sensor_rows(sensors)
-        out = []
-        for f in np.atleast_1d(np.asarray(freqs, dtype=np.float64)):
-            s = 2j * np.pi * f
-            q = np.linalg.solve(s * s * self.mass + s * self.damping + self.stiffness, d)
-            out.append((rows * s ** powers[:, None]) @ q)
-        return np.array(out)
+        return self._response(freqs, self.direction(point, other)[:, None], sensors)[:, :, 0]
 
     def _input_matrix(self, inputs):
         inputs = [inputs] if isinstance(inputs, str) else list(inputs)
@@ -341,12 +334,16 @@ class Structure:
         -------
         H : ndarray of shape (n_freqs, n_sensors, n_inputs), complex
         """
-        p_mat, _ = self._input_matrix(inputs)
+        return self._response(freqs, self._input_matrix(inputs)[0], sensors)
+
+    def _response(self, freqs, forces, sensors):
+        """The sensors' response to the forces ``forces`` (n_dof, n_forces)
+        on the degrees of freedom: (n_freqs, n_sensors, n_forces)."""
         rows, powers = self._sensor_rows(sensors)
         out = []
         for f in np.atleast_1d(np.asarray(freqs, dtype=np.float64)):
             s = 2j * np.pi * f
-            q = np.linalg.solve(s * s * self.mass + s * self.damping + self.stiffness, p_mat)
+            q = np.linalg.solve(s * s * self.mass + s * self.damping + self.stiffness, forces)
             out.append((rows * s ** powers[:, None]) @ q)
         return np.array(out)
 
