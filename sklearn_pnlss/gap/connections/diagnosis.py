@@ -25,7 +25,6 @@ from ...utils.parameters import Interval, validates_parameters
 from .locator import ConnectionLocator, band_and_weights
 from .recalibrate import ModalCorrection, recalibrated
 from .refine import BandError, fit_connection
-from .spectra import PeriodSpectra
 
 __all__ = ["StructuralGapDiagnosis", "StructuralGapReport"]
 
@@ -259,22 +258,19 @@ class StructuralGapDiagnosis(BaseEstimator):
         -------
         self : StructuralGapDiagnosis
         """
-        spectra = PeriodSpectra.from_signals(X, y, period=self.period, fs=self.fs,
-                                             transient_periods=self.transient_periods)
+        spectra = self._locator(self.nominal)._spectra(X, y)  # checked and read once for every round
         self.nominal_ = self.nominal
         if self.recalibrate:
             self.nominal_ = self._recalibrated(spectra)
         for _ in range(CORRECTION_ROUNDS):
-            self.locator_ = ConnectionLocator(self.nominal_, fs=self.fs, period=self.period, inputs=self.inputs,
-                                              sensors=self.sensors, places=self.places, laws=self.laws,
-                                              f_band=self.f_band, transient_periods=self.transient_periods).fit(X, y)
+            self.locator_ = self._locator(self.nominal_)._fit_spectra(spectra)
             corrections = self.locator_.best_.corrections
             if corrections is None or np.max(np.abs(corrections), initial=0.0) < CORRECTION_TOL:
                 break
             # the modal corrections are first-order: made exactly, the
             # nominal is read again around them (Gauss-Newton on the modes)
             self.nominal_ = self.locator_.nominal_for(self.locator_.best_)
-        error = self._band_error(X, y, self.oversampling)
+        error = self._band_error(spectra)
         self.nominal_train_error_ = error.relative(error.simulate(self.nominal))
         self.recalibrated_train_error_ = error.relative(error.simulate(self.nominal_))
         places = list(dict.fromkeys(c.place for c in self.locator_.ranking_))[:self.n_places]
@@ -336,11 +332,14 @@ class StructuralGapDiagnosis(BaseEstimator):
         return recalibrated(self.nominal, spectra.freqs[lines][excited], frf[:, :, None], weights,
                             inputs=self.inputs, sensors=self.sensors)
 
-    def _band_error(self, X, y, oversampling):
-        spectra = PeriodSpectra.from_signals(X, y, period=self.period, fs=self.fs,
-                                             transient_periods=self.transient_periods)
+    def _locator(self, nominal):
+        return ConnectionLocator(nominal, fs=self.fs, period=self.period, inputs=self.inputs, sensors=self.sensors,
+                                 places=self.places, laws=self.laws, f_band=self.f_band,
+                                 transient_periods=self.transient_periods)
+
+    def _band_error(self, spectra):
         return BandError(spectra, self.locator_.lines_, self.locator_.output_weights_, self.inputs, self.sensors,
-                         oversampling)
+                         self.oversampling)
 
     def report(self, X, y):
         """The diagnosis on validation records.
@@ -355,7 +354,7 @@ class StructuralGapDiagnosis(BaseEstimator):
         StructuralGapReport
         """
         check_is_fitted(self, "best_")
-        error = self._band_error(X, y, self.oversampling)
+        error = self._band_error(self.locator_._spectra(X, y))
         nominal, recalibrated, connection, linear = (_simulated(error, s) for s in (
             self.nominal, self.nominal_, self.best_.structure, self.linear_[self.best_.place].structure))
         e0, e1 = error.relative(nominal), error.relative(connection)

@@ -279,7 +279,11 @@ class ConnectionLocator(BaseEstimator):
         -------
         self : ConnectionLocator
         """
-        spectra = self._spectra(X, y)
+        return self._fit_spectra(self._spectra(X, y))
+
+    def _fit_spectra(self, spectra):
+        """:meth:`fit` on the records' checked spectra (a diagnosis reads
+        them once for all its rounds)."""
         self.lines_, self.output_weights_ = band_and_weights(spectra, self.f_band)
         freqs = spectra.freqs[self.lines_]
         self.input_response_ = self.nominal.frequency_response(freqs, inputs=list(self.inputs),

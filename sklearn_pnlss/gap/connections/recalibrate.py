@@ -42,12 +42,13 @@ def modal_form(structure):
                                 connections=structure.connections, coupled=np.ones(omega.size, bool))
 
 
-def _modal_frf(freqs, omega, zeta, shapes_out, shapes_in, powers):
-    """Sum of the modes' terms at ``freqs``: (n_freqs, n_outputs, n_inputs)."""
+def _modal_terms(freqs, omega, zeta, shapes_out, shapes_in, powers):
+    """Each mode's term at ``freqs``, (n_freqs, n_outputs, n_inputs,
+    n_modes), and its denominator (n_freqs, n_modes)."""
     s = 2j * np.pi * freqs[:, None]
-    den = omega**2 + 2 * zeta * omega * s + s**2  # (n_freqs, n_modes)
-    terms = np.einsum("om,im,fm->foi", shapes_out, shapes_in, 1.0 / den)
-    return terms * s[:, :, None] ** powers[None, :, None]
+    den = omega**2 + 2 * zeta * omega * s + s**2
+    terms = np.einsum("om,im,fm->foim", shapes_out, shapes_in, 1.0 / den)
+    return terms * (s ** powers[None, :])[:, :, None, None], den
 
 
 def _modal_parameters(modal):
@@ -79,13 +80,10 @@ class ModalCorrection:
         rows = [self.modal.points.index(p) for p, _ in sensors]
         cols = [self.modal.points.index(p) for p in inputs]
         powers = np.array([SENSOR_KINDS.index(kind) for _, kind in sensors])
-        s = 2j * np.pi * freqs[:, None]
         w, z = omega[self.modes], zeta[self.modes]
-        den = w**2 + 2 * z * w * s + s**2
-        # each mode's term (n_freqs, n_outputs, n_inputs, n_modes) and its
-        # derivatives by the three logarithms
-        term = np.einsum("om,im,fm->foim", shapes[rows][:, self.modes], shapes[cols][:, self.modes], 1.0 / den)
-        term *= (s ** powers[None, :])[:, :, None, None]
+        s = 2j * np.pi * freqs[:, None]
+        # each mode's term and its derivatives by the three logarithms
+        term, den = _modal_terms(freqs, w, z, shapes[rows][:, self.modes], shapes[cols][:, self.modes], powers)
         d_freq = -term * ((2 * w**2 + 2 * z * w * s) / den)[:, None, None, :]
         d_damp = -term * ((2 * z * w * s) / den)[:, None, None, :]
         self.jacobian = np.concatenate([d_freq, d_damp, 2 * term], axis=3)
@@ -155,7 +153,8 @@ def recalibrated(structure, freqs, frf, weights, *, inputs, sensors):
 
     def residuals(theta):
         w, z, phi = model(theta)
-        e = (_modal_frf(freqs, w, z, phi[rows], phi[cols], powers) * weights[None, :, None] - weighted).ravel()
+        frf = _modal_terms(freqs, w, z, phi[rows], phi[cols], powers)[0].sum(axis=3)
+        e = (frf * weights[None, :, None] - weighted).ravel()
         return np.concatenate([e.real, e.imag])
 
     res = least_squares(residuals, np.zeros(3 * free.size), method="lm", xtol=1e-10, ftol=1e-10)
