@@ -1,6 +1,8 @@
-"""The estimators: BLA (linear) and polynomial nonlinear state-space."""
+"""The estimators: BLA (linear), polynomial nonlinear state-space, and the
+integrated-output wrapper for outputs that integrate."""
 from .bla import BLAEstimator
 from .decoupled import DecoupledPNLSSRegressor
+from .integrated import IntegratedOutputRegressor
 from .pnlss import PNLSSRegressor
 
-__all__ = ["BLAEstimator", "DecoupledPNLSSRegressor", "PNLSSRegressor"]
+__all__ = ["BLAEstimator", "DecoupledPNLSSRegressor", "IntegratedOutputRegressor", "PNLSSRegressor"]
