@@ -122,3 +122,34 @@ def test_a_well_conditioned_basis_reaches_the_optimum_in_fewer_steps():
     assert np.linalg.cond(powers / np.linalg.norm(powers, axis=0)) > 1e3
     assert excess(basis=basis) < 1e-6
     assert excess() > 1e-2
+
+
+@pytest.mark.parametrize("damping, ratio", [("nielsen", 1 / np.sqrt(3)), ("toolbox", 1 / 2)])
+def test_the_damping_falls_by_the_rule_on_a_model_that_is_exact(damping, ratio):
+    """On a linear problem the linearised model predicts each step's fall
+    exactly (rho = 1): Nielsen's rule divides mu = lambda^2 by 3, the
+    toolbox's divides lambda by 2."""
+    rng = np.random.default_rng(2)
+    A = rng.standard_normal((40, 6)) * np.logspace(0, 3, 6)
+    b = rng.standard_normal(40)
+    result = levenberg_marquardt(lambda th: A @ th - b, lambda th: (A.T @ A, A.T @ (A @ th - b)), np.zeros(6),
+                                 max_iter=6, tol=0.0, damping=damping)
+    lams = np.array([lam for _, _, lam in result.history[1:]])
+    np.testing.assert_allclose(lams[1:] / lams[:-1], ratio, rtol=1e-9)
+
+
+def test_a_failed_step_costs_a_factor_that_doubles_with_each_failure_in_a_row():
+    """Trial points beyond theta = 0.9 'diverge': from 0 with lambda equal
+    to the singular value the first step (to 1.5) fails, mu is multiplied by
+    2 (step to 1.0, fails), then by 4; the first accepted step is below 0.9."""
+    def residual(th):
+        return None if th[0] > 0.9 else np.array([th[0] - 3.0])
+
+    def normal_equations(th):
+        return np.array([[1.0]]), np.array([th[0] - 3.0])
+
+    result = levenberg_marquardt(residual, normal_equations, np.array([0.0]), max_iter=1)
+    # mu = 1 * 2 * 4 = 8 after two failures: step 3 / (1 + 8) = 1/3.
+    assert result.theta[0] == pytest.approx(1 / 3, rel=1e-12)
+    with pytest.raises(ValueError, match="damping must be"):
+        levenberg_marquardt(residual, normal_equations, np.array([0.0]), damping="fast")

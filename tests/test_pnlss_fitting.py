@@ -253,9 +253,11 @@ def test_growing_degrees_chains_the_stages():
     assert grown.best_iteration_ == int(np.argmin(hist))
     assert np.isclose(-grown.score(X_val, y_val), hist.min(), atol=1e-6)
     assert grown.n_params_ == direct.n_params_
-    # Measured: the grown fit -38.5 dB, the direct one -36.3 dB, from -32.9 dB
+    # Measured: the grown fit -38.8 dB, the direct one -38.1 dB, from -32.9 dB
     # (the late iterates of both run away on the validation input amplified
     # 1.2 times, though the truth does not even at 1.5: they are not kept).
+    # With the toolbox's damping schedule the direct fit stalled at -36.3 dB;
+    # Nielsen's closed most of that difference.
     assert np.isinf(hist).any() and np.isinf(direct.validation_history_).any()
     assert hist.min() < hist[0] - 5
-    assert hist.min() < direct.validation_history_.min() - 1.5
+    assert hist.min() < direct.validation_history_.min() - 0.3

@@ -12,10 +12,45 @@ from ..utils.handover import attach_stage, training_signals
 from ..statespace.model_base import DivergenceError
 from ..utils.validation import as_signal_list, is_periodic, restore_layout, signal_layout, validate_signals
 
-__all__ = ["SignalRegressorBase"]
+__all__ = ["DynamicRegressorMixin", "SignalRegressorBase"]
 
 
-class SignalRegressorBase(RegressorMixin, BaseEstimator):
+class DynamicRegressorMixin(RegressorMixin):
+    """The score and tags of a regressor mapping input signals to output
+    signals: minus the rms simulation error in dB, several outputs, no NaN.
+    """
+
+    def score(self, X, y, sample_weight=None):
+        """Minus the rms simulation error in dB (higher is better).
+
+        A model whose simulation error is 1e-5 (in the units of ``y``) over
+        all signals scores 100.
+
+        Parameters
+        ----------
+        X : signals, as in :meth:`predict`
+        y : signals, true outputs in the same layout
+        sample_weight : None
+            Not supported (kept for scikit-learn's signature).
+
+        Returns
+        -------
+        float
+        """
+        if sample_weight is not None:
+            raise ValueError("sample_weight is not supported by dynamic models; pass None.")
+        return -rms_error(y, self.predict(X), db=True)
+
+    def __sklearn_tags__(self):
+        tags = super().__sklearn_tags__()
+        tags.regressor_tags.poor_score = True
+        tags.target_tags.single_output = False
+        tags.target_tags.multi_output = True
+        tags.input_tags.allow_nan = False
+        return tags
+
+
+class SignalRegressorBase(DynamicRegressorMixin, BaseEstimator):
     """Base for regressors mapping input signals to output signals.
 
     Subclasses implement ``fit`` (starting with ``_validate_fit_data``) and
@@ -159,27 +194,6 @@ class SignalRegressorBase(RegressorMixin, BaseEstimator):
                 "measured with X.", sample=exc.sample,
             ) from None
 
-    def score(self, X, y, sample_weight=None):
-        """Minus the rms simulation error in dB (higher is better).
-
-        A model whose simulation error is 1e-5 (in the units of ``y``) over
-        all signals scores 100.
-
-        Parameters
-        ----------
-        X : signals, as in :meth:`predict`
-        y : signals, true outputs in the same layout
-        sample_weight : None
-            Not supported (kept for scikit-learn's signature).
-
-        Returns
-        -------
-        float
-        """
-        if sample_weight is not None:
-            raise ValueError("sample_weight is not supported by dynamic models; pass None.")
-        return -rms_error(y, self.predict(X), db=True)
-
     def summary(self, X=None, y=None, *, fs=None):
         """What the fitted model is: sizes, poles of its linear part, and the
         figures of its fit.
@@ -266,10 +280,6 @@ class SignalRegressorBase(RegressorMixin, BaseEstimator):
 
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()
-        tags.regressor_tags.poor_score = True
-        tags.target_tags.single_output = False
-        tags.target_tags.multi_output = True
-        tags.input_tags.allow_nan = False
         # transform is the Pipeline hand-over: signals pass through unchanged.
         tags.transformer_tags = TransformerTags(preserves_dtype=[])
         return tags

@@ -11,11 +11,11 @@ the integrator out of the fit: what is fitted is stable, and the output is
 its running sum, an integrator that is exact by construction.
 """
 import numpy as np
-from sklearn.base import BaseEstimator, RegressorMixin, clone
+from sklearn.base import BaseEstimator, clone
 from sklearn.utils.validation import check_is_fitted
 
-from ..metrics import rms_error
 from ..utils.validation import as_signal_list, is_periodic, restore_layout, signal_layout, validate_signals
+from ._base import DynamicRegressorMixin
 from .bla import BLAEstimator
 
 __all__ = ["IntegratedOutputRegressor"]
@@ -47,7 +47,7 @@ def integrated(d, start):
     return start + np.cumsum(d, axis=0) - d[0]
 
 
-class IntegratedOutputRegressor(RegressorMixin, BaseEstimator):
+class IntegratedOutputRegressor(DynamicRegressorMixin, BaseEstimator):
     """Fit a model to the increments of the outputs; predict their sum.
 
     For outputs that integrate (a drive's position, a water volume, the
@@ -203,30 +203,3 @@ class IntegratedOutputRegressor(RegressorMixin, BaseEstimator):
                 y = integrated(d, np.zeros(d.shape[1]))
             out.append(y)
         return restore_layout(out, layout, squeeze_1d=self._y_was_1d)
-
-    def score(self, X, y, sample_weight=None):
-        """Minus the rms simulation error of the outputs in dB (higher is
-        better), as the library's other regressors score.
-
-        Parameters
-        ----------
-        X : signals, as in :meth:`predict`
-        y : signals, true outputs in the same layout
-        sample_weight : None
-            Not supported (kept for scikit-learn's signature).
-
-        Returns
-        -------
-        float
-        """
-        if sample_weight is not None:
-            raise ValueError("sample_weight is not supported by dynamic models; pass None.")
-        return -rms_error(y, self.predict(X), db=True)
-
-    def __sklearn_tags__(self):
-        tags = super().__sklearn_tags__()
-        tags.regressor_tags.poor_score = True
-        tags.target_tags.single_output = False
-        tags.target_tags.multi_output = True
-        tags.input_tags.allow_nan = False
-        return tags

@@ -3,10 +3,22 @@
 Jacobian columns scaled to unit rms, the step solved in the basis of the
 right singular vectors of the scaled Jacobian, the ``n_drop`` smallest
 singular values dropped (the state basis of a state-space model is not
-unique: n^2 directions leave the output unchanged), lambda halved on success
-and multiplied by 10 on failure, only improving iterates accepted (so the
-returned one is the best met). A trial step whose simulation diverges counts
-as a failure, never as a result.
+unique: n^2 directions leave the output unchanged), only improving iterates
+accepted (so the returned one is the best met). A trial step whose
+simulation diverges counts as a failure, never as a result.
+
+The damping follows Nielsen's rule (Madsen, Nielsen and Tingleff, *Methods
+for non-linear least squares problems*, 2004, section 3.2) rather than the
+toolbox's (lambda halved on success, multiplied by 10 on failure): on
+success the damping ``mu = lambda^2`` is multiplied by
+``max(1/3, 1 - (2 rho - 1)^3)``, where ``rho`` is the cost's fall over the
+fall the linearised model predicted; on failure by ``nu``, which doubles at
+each failure in a row. A good quadratic model (``rho`` near 1) thus lowers
+the damping, a poor one (``rho`` near 0) raises it without a failed
+simulation, and one failure costs a factor 2 instead of 100. Measured on
+the WH2009 benchmark (833 parameters, 100 iterations from the same start):
+the training cost ends 7 dB lower (-3.5 dB against +3.4 dB) with the same
+number of simulations (``benchmarks/bench_lm_schedule.py``).
 
 The singular values and right singular vectors come from the eigenvalues of
 J^T J rather than from an SVD of J. Both give the same step; the normal
@@ -58,7 +70,7 @@ def lm_step_basis(G, n_drop):
 
 def levenberg_marquardt(
     residual, normal_equations, theta0, *, n_drop=0, max_iter=100, tol=1e-10,
-    max_lambda=1e12, callback=None, basis=None,
+    max_lambda=1e12, callback=None, basis=None, damping="nielsen",
 ):
     """Minimise ``||residual(theta)||^2``.
 
@@ -84,6 +96,10 @@ def levenberg_marquardt(
     basis : ndarray of shape (n_params, n_params) or None
         Invertible: each step is ``basis @ phi`` with ``phi`` solved from the
         Jacobian ``J @ basis``. None: the identity.
+    damping : {"nielsen", "toolbox"}, default="nielsen"
+        How the damping changes between steps: Nielsen's rule (see the
+        module), or the PNLSS toolbox's (lambda halved on success,
+        multiplied by 10 on failure), kept to compare with it.
 
     Returns
     -------
@@ -95,7 +111,9 @@ def levenberg_marquardt(
         raise ValueError("The starting model diverges on the training data; cannot optimise from it.")
     cost = float(e @ e)
     history = [(0, cost, np.nan)]
-    lam = None
+    if damping not in ("nielsen", "toolbox"):
+        raise ValueError(f"damping must be 'nielsen' or 'toolbox'; got {damping!r}.")
+    mu, nu = None, 2.0  # damping (lambda^2) and its growth at the next failure
     it = 0
     for it in range(1, max_iter + 1):
         G, g = normal_equations(theta)
@@ -103,26 +121,31 @@ def levenberg_marquardt(
             G, g = basis.T @ G @ basis, basis.T @ g
         scale, S, V = lm_step_basis(G, n_drop)
         Vg = V.T @ (g / scale)
-        if lam is None:
-            lam = S[0]
+        if mu is None:
+            mu = S[0] ** 2
         improved = False
-        while lam <= max_lambda * S[0]:
-            # Scaled step -V diag(1 / (S^2 + lam^2)) V^T J^T e, then unscaled.
-            step = (V @ (Vg / (S**2 + lam**2))) / scale
+        while mu <= (max_lambda * S[0]) ** 2:
+            # Scaled step -V diag(1 / (S^2 + mu)) V^T J^T e, then unscaled.
+            step = (V @ (Vg / (S**2 + mu))) / scale
             trial = theta - (step if basis is None else basis @ step)
             e_new = residual(trial)
             if e_new is not None and np.all(np.isfinite(e_new)):
                 cost_new = float(e_new @ e_new)
                 if cost_new < cost:
+                    # The fall the linearised model predicts for this step.
+                    predicted = float(np.sum(Vg**2 * (S**2 + 2 * mu) / (S**2 + mu) ** 2))
+                    rho = (cost - cost_new) / predicted
                     rel = (cost - cost_new) / cost
                     theta, e, cost = trial, e_new, cost_new
-                    lam /= 2
+                    mu *= max(1 / 3, 1 - (2 * rho - 1) ** 3) if damping == "nielsen" else 1 / 4
+                    nu = 2.0
                     improved = True
                     break
-            lam *= 10
-        history.append((it, cost, lam))
+            mu *= nu if damping == "nielsen" else 100.0
+            nu *= 2
+        history.append((it, cost, np.sqrt(mu)))
         if callback is not None:
-            callback(it, theta, cost, lam)
+            callback(it, theta, cost, np.sqrt(mu))
         if not improved or rel < tol:
             break
     return LMResult(theta=theta, cost=cost, n_iter=it, history=history)
