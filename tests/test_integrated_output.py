@@ -109,6 +109,8 @@ def test_bad_y_init_is_refused_with_the_fix():
         model.predict(u, y_init=y[:1, :5])
     with pytest.raises(ValueError, match="requires y"):
         IntegratedOutputRegressor().fit(u, None)
+    with pytest.raises(ValueError, match="regressor"):
+        IntegratedOutputRegressor("BLA").fit(u, y)
 
 
 @pytest.mark.skipif(not (DATA / "emps").is_dir(), reason="EMPS data not in ../shared/data")

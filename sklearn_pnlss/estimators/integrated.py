@@ -14,6 +14,7 @@ import numpy as np
 from sklearn.base import BaseEstimator, clone
 from sklearn.utils.validation import check_is_fitted
 
+from ..utils.parameters import validates_parameters
 from ..utils.validation import as_signal_list, is_periodic, restore_layout, signal_layout, validate_signals
 from ._base import DynamicRegressorMixin
 from .bla import BLAEstimator
@@ -109,12 +110,15 @@ class IntegratedOutputRegressor(DynamicRegressorMixin, BaseEstimator):
     (True, 0.35)
     """
 
+    _parameter_constraints = {"regressor": [BaseEstimator, None]}
+
     def __init__(self, regressor=None):
         self.regressor = regressor
 
     def _periodic(self, n_samples):
         return is_periodic(n_samples, _period(self.regressor_))
 
+    @validates_parameters
     def fit(self, X, y, **fit_params):
         """Fit ``regressor`` to the increments of ``y``.
 
