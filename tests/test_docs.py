@@ -263,14 +263,6 @@ def _bounded(model, extrapolation="hold"):
                 if row["model"] == model and row["extrapolation"] == extrapolation)
 
 
-def _held_twin_gap(model):
-    """Largest |dB| between a model fitted with extrapolation="polynomial"
-    and "hold": 50 N mean, official multisine and sweep."""
-    plain, held = _bounded(model, "polynomial"), _bounded(model)
-    figures = {"new_50N": "db_mean", "official_multisine": "db", "official_sweep": "db"}
-    return max(abs(plain[signal][key] - held[signal][key]) for signal, key in figures.items())
-
-
 def _accuracy(record, degrees, grown):
     """A converged fit of bench_pnlss.py --accuracy."""
     return next(row for row in _results("pnlss")["accuracy"]
@@ -693,22 +685,22 @@ FIGURES = [
                "- -91.12 / -97.22 dB", BOUNDED, lambda: [2, 3, *_bounded_row("pnlss_states_23")]),
     Figure(PN, "PNLSS (2, 3), states and input, main job's data - 106 - 0 / 0, -94.29 dB - 0 / 0, -91.70 dB "
                "- -94.37 / -97.27 dB", BOUNDED, lambda: [2, 3, *_bounded_row("pnlss_si_23")]),
-    Figure(PN, "decoupled r = 3, d = 10 (main job) - 67 - 0 / 0, -97.61 dB - 0 / 0, -95.44 dB "
-               "- -97.62 / -101.74 dB", BOUNDED, lambda: [3, 10, *_bounded_row("decoupled_r3_d10")]),
-    Figure(PN, "decoupled r = 3, d = 11 (the grid's best of at most 60 nonlinear parameters) - 70 - 0 / 0, -98.68 dB "
-               "- 0 / 0, -95.44 dB - -99.05 / -102.46 dB", f"{BOUNDED}; {GRID}",
+    Figure(PN, "decoupled r = 3, d = 10 (main job) - 67 - 0 / 0, -97.97 dB - 0 / 0, -95.22 dB "
+               "- -98.19 / -101.66 dB", BOUNDED, lambda: [3, 10, *_bounded_row("decoupled_r3_d10")]),
+    Figure(PN, "decoupled r = 3, d = 11 (the grid's best of at most 60 nonlinear parameters) - 70 - 0 / 0, -99.88 dB "
+               "- 0 / 0, -95.80 dB - -100.06 / -104.18 dB", f"{BOUNDED}; {GRID}",
            lambda: [*_grid_best_within_60(), *_bounded_row("decoupled_r3_d11")]),
-    Figure(PN, "PNLSS (3, 5, 7), states, grown, twenty realisations - 217 - 0 / 0, -98.49 dB - 0 / 7, -91.66 dB "
-               "- -98.56 / -104.83 dB", BOUNDED, lambda: [3, 5, 7, *_bounded_row("pnlss_states_357")]),
-    Figure(PN, "diverge on 1 of the 20 signals at 60 N (both decoupled models) and on 8 ((3, 5, 7))", BOUNDED,
-           lambda: [_bounded("decoupled_r3_d10", "polynomial")["new_60N"]["n_diverged"]
-                    if _bounded("decoupled_r3_d11", "polynomial")["new_60N"]["n_diverged"]
-                    == _bounded("decoupled_r3_d10", "polynomial")["new_60N"]["n_diverged"] else -1,
-                    _results("bounded")["n_new_signals_per_level"], _results("bounded")["levels_N"][1],
+    Figure(PN, "PNLSS (3, 5, 7), states, grown, twenty realisations - 217 - 0 / 0, -98.57 dB - 0 / 6, -91.08 dB "
+               "- -98.48 / -104.81 dB", BOUNDED, lambda: [3, 5, 7, *_bounded_row("pnlss_states_357")]),
+    Figure(PN, "diverge on 2 and 4 of the 20 signals at 60 N (the decoupled models of degree 10 and 11) and on 7 "
+               "((3, 5, 7))", BOUNDED,
+           lambda: [_bounded("decoupled_r3_d10", "polynomial")["new_60N"]["n_diverged"],
+                    _bounded("decoupled_r3_d11", "polynomial")["new_60N"]["n_diverged"],
+                    _results("bounded")["n_new_signals_per_level"], _results("bounded")["levels_N"][1], 10, 11,
                     _bounded("pnlss_states_357", "polynomial")["new_60N"]["n_diverged"], 3, 5, 7]),
-    Figure(PN, "the decoupled r = 3, d = 11 model then averages -95.54 dB at 50 N and reaches -95.14 / -98.81 dB "
-               "on the official signals, 3.1 dB and 3.9 dB worse than held, while the r = 3, d = 10 model is within "
-               "0.3 dB of its held twin", BOUNDED,
+    Figure(PN, "the decoupled r = 3, d = 11 model then averages -99.03 dB at 50 N and reaches -97.17 / -102.14 dB "
+               "on the official signals, 0.85 dB and 2.89 dB worse than held, and the r = 3, d = 10 model -96.26 dB on "
+               "the official multisine, 1.93 dB worse than held", BOUNDED,
            lambda: [3, 11, _bounded("decoupled_r3_d11", "polynomial")["new_50N"]["db_mean"], 50,
                     _bounded("decoupled_r3_d11", "polynomial")["official_multisine"]["db"],
                     _bounded("decoupled_r3_d11", "polynomial")["official_sweep"]["db"],
@@ -716,8 +708,10 @@ FIGURES = [
                     - _bounded("decoupled_r3_d11")["new_50N"]["db_mean"],
                     _bounded("decoupled_r3_d11", "polynomial")["official_multisine"]["db"]
                     - _bounded("decoupled_r3_d11")["official_multisine"]["db"],
-                    3, 10, _held_twin_gap("decoupled_r3_d10")], slack=0.05),
-    Figure(PN, "leaves its range on 7 of the 20 signals at 60 N even when held", BOUNDED,
+                    3, 10, _bounded("decoupled_r3_d10", "polynomial")["official_multisine"]["db"],
+                    _bounded("decoupled_r3_d10", "polynomial")["official_multisine"]["db"]
+                    - _bounded("decoupled_r3_d10")["official_multisine"]["db"]]),
+    Figure(PN, "leaves its range on 6 of the 20 signals at 60 N even when held", BOUNDED,
            lambda: [_bounded("pnlss_states_357")["new_60N"]["n_runaway"],
                     _results("bounded")["n_new_signals_per_level"], _results("bounded")["levels_N"][1]]),
     # PNLSS: high degrees (bench_pnlss.py --accuracy)
@@ -729,7 +723,7 @@ FIGURES = [
     Figure(PN, "20 × 2 periods - −98.56 / −104.83 dB", ACCURACY,
            lambda: [20, 2, _accuracy("make_bouc_wen 20 x 2 + 2 val, random_state=0", (3, 5, 7), True)["db_multisine"],
                     _accuracy("make_bouc_wen 20 x 2 + 2 val, random_state=0", (3, 5, 7), True)["db_sweep"]]),
-    Figure(PN, "averages −98.49 dB (from −94.58 to −99.76 dB", BOUNDED,
+    Figure(PN, "averages −98.57 dB (from −95.92 to −99.75 dB", BOUNDED,
            lambda: [_bounded("pnlss_states_357")["new_50N"]["db_mean"], _bounded("pnlss_states_357")["new_50N"]["db_worst"],
                     _bounded("pnlss_states_357")["new_50N"]["db_best"]]),
     Figure(PN, "all 201 nonlinear coefficients", "the models' structure",
@@ -747,7 +741,7 @@ FIGURES = [
                     _accuracy("make_bouc_wen 20 x 2 + 2 val, random_state=0", (3, 5, 7), True)["fit_s"],
                     _accuracy("make_bouc_wen 20 x 2 + 2 val, random_state=0", (3, 5, 7), False)["n_iter"],
                     _accuracy("make_bouc_wen 20 x 2 + 2 val, random_state=0", (3, 5, 7), False)["fit_s"]]),
-    Figure(PN, "at 60 N, the twenty-realisation model leaves its range on 7 of 20 new realisations", BOUNDED,
+    Figure(PN, "at 60 N, the twenty-realisation model leaves its range on 6 of 20 new realisations", BOUNDED,
            lambda: [_results("bounded")["levels_N"][1], _bounded("pnlss_states_357")["new_60N"]["n_runaway"],
                     _results("bounded")["n_new_signals_per_level"]]),
     # Decoupling
