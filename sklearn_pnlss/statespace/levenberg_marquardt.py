@@ -106,14 +106,14 @@ def levenberg_marquardt(
     -------
     LMResult
     """
+    if damping not in ("nielsen", "toolbox"):
+        raise ValueError(f"damping must be 'nielsen' or 'toolbox'; got {damping!r}.")
     theta = np.array(theta0, dtype=float)
     e = residual(theta)
     if e is None or not np.all(np.isfinite(e)):
         raise ValueError("The starting model diverges on the training data; cannot optimise from it.")
     cost = float(e @ e)
     history = [(0, cost, np.nan)]
-    if damping not in ("nielsen", "toolbox"):
-        raise ValueError(f"damping must be 'nielsen' or 'toolbox'; got {damping!r}.")
     mu, nu = None, 2.0  # damping (lambda^2) and its growth at the next failure
     it = 0
     for it in range(1, max_iter + 1):
