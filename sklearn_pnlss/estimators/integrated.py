@@ -4,8 +4,8 @@ A drive's position, a tank's volume, any rigid-body motion integrates: the
 system has a pole at z = 1 (a free mass has two, position from velocity
 from force). A state-space model fitted to such an output puts that pole
 just inside or just outside the unit circle, and its simulation drifts
-without bound (on the EMPS benchmark a linear model fitted on the
-simulation error ends at 680 mm from a 5.5 mm published linear figure).
+(on the EMPS benchmark the BLA of the position misses the test record by
+58.8 mm, the BLA of its increments, summed, by 13.0 mm).
 Modelling the increments instead (the velocity, sample by sample) leaves
 the integrator out of the fit: what is fitted is stable, and the output is
 its running sum, an integrator that is exact by construction.
