@@ -263,6 +263,14 @@ def _bounded(model, extrapolation="hold"):
                 if row["model"] == model and row["extrapolation"] == extrapolation)
 
 
+def _second_draw_gap():
+    """Largest |dB| between the grown and the direct (3, 5, 7) fits of the
+    second twenty-realisation draw, on either official test signal."""
+    record = "make_bouc_wen 20 x 2 + 2 val, random_state=7"
+    return max(abs(_accuracy(record, (3, 5, 7), True)[key] - _accuracy(record, (3, 5, 7), False)[key])
+               for key in ("db_multisine", "db_sweep"))
+
+
 def _accuracy(record, degrees, grown):
     """A converged fit of bench_pnlss.py --accuracy."""
     return next(row for row in _results("pnlss")["accuracy"]
@@ -718,10 +726,10 @@ FIGURES = [
     # PNLSS: high degrees (bench_pnlss.py --accuracy)
     Figure(PN, "states only, degrees (3, 5, 7), 217 parameters", "the models' structure",
            lambda: [3, 5, 7, _n_params("states", (3, 5, 7))]),
-    Figure(PN, "5 × 2 periods - −96.14 / −103.13 dB", ACCURACY,
+    Figure(PN, "5 × 2 periods - −96.65 / −103.61 dB", ACCURACY,
            lambda: [5, 2, _accuracy("make_bouc_wen 5 x 2 + 1 val", (3, 5, 7), True)["db_multisine"],
                     _accuracy("make_bouc_wen 5 x 2 + 1 val", (3, 5, 7), True)["db_sweep"]]),
-    Figure(PN, "20 × 2 periods - −98.56 / −104.83 dB", ACCURACY,
+    Figure(PN, "20 × 2 periods - −98.48 / −104.81 dB", ACCURACY,
            lambda: [20, 2, _accuracy("make_bouc_wen 20 x 2 + 2 val, random_state=0", (3, 5, 7), True)["db_multisine"],
                     _accuracy("make_bouc_wen 20 x 2 + 2 val, random_state=0", (3, 5, 7), True)["db_sweep"]]),
     Figure(PN, "averages −98.57 dB (from −95.92 to −99.75 dB", BOUNDED,
@@ -731,17 +739,23 @@ FIGURES = [
            lambda: [_n_nonlinear("states", (3, 5, 7))]),
     Figure(PN, "300 iterations in the last stage", ACCURACY,
            lambda: [_accuracy("make_bouc_wen 20 x 2 + 2 val, random_state=0", (3, 5, 7), False)["n_iter"]]),
-    Figure(PN, "- −98.02 / −104.27 dB - −98.56 / −104.83 dB", ACCURACY,
+    Figure(PN, "- −89.95 / −97.13 dB - −98.48 / −104.81 dB", ACCURACY,
            lambda: [_accuracy("make_bouc_wen 20 x 2 + 2 val, random_state=0", (3, 5, 7), grown)[key]
                     for grown in (False, True) for key in ("db_multisine", "db_sweep")]),
-    Figure(PN, "- −93.69 / −101.78 dB - −98.58 / −104.75 dB", ACCURACY,
+    Figure(PN, "- −98.13 / −104.29 dB - −97.67 / −104.58 dB", ACCURACY,
            lambda: [_accuracy("make_bouc_wen 20 x 2 + 2 val, random_state=7", (3, 5, 7), grown)[key]
                     for grown in (False, True) for key in ("db_multisine", "db_sweep")]),
-    Figure(PN, "(436 iterations in all on the first draw, 204 s on two cores, against 300 and 157 s)", ACCURACY,
+    Figure(PN, "(424 iterations in all on the first draw, in 193 s on two cores; the direct fit ran 300 in 396 s)",
+           ACCURACY,
            lambda: [_accuracy("make_bouc_wen 20 x 2 + 2 val, random_state=0", (3, 5, 7), True)["n_iter"],
                     _accuracy("make_bouc_wen 20 x 2 + 2 val, random_state=0", (3, 5, 7), True)["fit_s"],
                     _accuracy("make_bouc_wen 20 x 2 + 2 val, random_state=0", (3, 5, 7), False)["n_iter"],
                     _accuracy("make_bouc_wen 20 x 2 + 2 val, random_state=0", (3, 5, 7), False)["fit_s"]]),
+    Figure(PN, "grown and direct end within 0.5 dB of each other; on the first draw the direct fit still ends 8.5 dB "
+               "behind", ACCURACY,
+           lambda: [0.5 if _second_draw_gap() < 0.5 else _second_draw_gap(),
+                    _accuracy("make_bouc_wen 20 x 2 + 2 val, random_state=0", (3, 5, 7), False)["db_multisine"]
+                    - _accuracy("make_bouc_wen 20 x 2 + 2 val, random_state=0", (3, 5, 7), True)["db_multisine"]]),
     Figure(PN, "at 60 N, the twenty-realisation model leaves its range on 6 of 20 new realisations", BOUNDED,
            lambda: [_results("bounded")["levels_N"][1], _bounded("pnlss_states_357")["new_60N"]["n_runaway"],
                     _results("bounded")["n_new_signals_per_level"]]),
