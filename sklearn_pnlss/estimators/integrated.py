@@ -198,12 +198,8 @@ class IntegratedOutputRegressor(DynamicRegressorMixin, BaseEstimator):
                 d[0] = d[1]
             else:
                 d = self.regressor_.predict(U).reshape(U.shape[0], -1)
-            if head is not None:
-                y = integrated(d, head[0])
-            elif self._periodic(U.shape[0]):
-                y = integrated(d, 0.0)
+            y = integrated(d, np.zeros(self.n_outputs_) if head is None else head[0])
+            if head is None and self._periodic(U.shape[0]):
                 y += self.output_mean_ - y.mean(axis=0)
-            else:
-                y = integrated(d, np.zeros(d.shape[1]))
             out.append(y)
         return restore_layout(out, layout, squeeze_1d=self._y_was_1d)
