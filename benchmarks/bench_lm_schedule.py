@@ -1,8 +1,8 @@
 """Levenberg-Marquardt's damping rule, Nielsen's against the PNLSS
-toolbox's, on the same fits from the same starts: the WH2009 benchmark
-(833 parameters, one long measured record), the cascaded tanks (25
-parameters, 1024 samples), the EMPS drive (the model of its position's
-increments, 2 states), the Bouc-Wen quick start
+toolbox's, on the same fits from the same starts: the PNLSS models of
+``bench_field.py`` (WH2009: 833 parameters, one long measured record; the
+cascaded tanks: 33 parameters, 1024 samples; EMPS: the model of its
+position's increments, 2 states), the Bouc-Wen quick start
 (PNLSS and decoupled models on several training seeds) and the F-16
 (2,893 parameters, four levels).
 
@@ -13,8 +13,8 @@ Each fit runs once with ``damping="toolbox"`` (lambda halved on success,
 multiplied by 10 on failure) and once with ``damping="nielsen"`` (the
 library's rule, see :mod:`sklearn_pnlss.statespace.levenberg_marquardt`);
 the rule is swapped in for the run (in the fitting engine and in the
-subspace refinement of the linear start), nothing else changes. Printed and written to ``benchmarks/results/lm_schedule.json``:
-the training cost (dB, every tenth iteration and at the end), the test
+subspace refinement of the linear start), nothing else changes. Printed
+and written to ``benchmarks/results/lm_schedule.json``: the training cost (dB, every tenth iteration and at the end), the test
 error in the benchmark's unit and the fit time.
 """
 import argparse
@@ -57,87 +57,35 @@ def cost_trace(model):
             "n_iter": int(model.n_iter_)}
 
 
-def wh2009(args):
-    """The field benchmark's PNLSS model (as in bench_field.py) for
-    ``--max-iter`` iterations, scored on the official test split."""
-    from sklearn.pipeline import make_pipeline
+# Each field benchmark's model of bench_field.py that these runs compare.
+FIELD_MODELS = {"wh2009": "PNLSS", "cascaded_tanks": "PNLSS", "emps": "PNLSS of the increments, summed"}
 
-    from sklearn_pnlss import BLAEstimator, PNLSSRegressor
+
+def field_benchmark(name, args):
+    """The field benchmark's model of bench_field.py, its iterations set to
+    ``--max-iter``, scored on the official test split in the field's unit."""
+    import bench_field
+
     from sklearn_pnlss.datasets import load_benchmark
     from sklearn_pnlss.metrics import rms_error
 
-    data = load_benchmark("wh2009", args.data_dir)
+    data = load_benchmark(name, args.data_dir)
+    make = {label: factory for label, _, factory in bench_field.models(name)}[FIELD_MODELS[name]]
     rows = []
     for damping in DAMPINGS:
-        model = make_pipeline(BLAEstimator(6, fs=51200.0),
-                              PNLSSRegressor(6, degrees=(2, 3), variables="states_inputs", equations="both",
-                                             max_iter=args.max_iter, n_jobs=2))
+        model = make()
+        model.set_params(**{key: args.max_iter for key in model.get_params() if key.endswith("pnlssregressor__max_iter")})
         with damping_rule(damping):
             t0 = time.perf_counter()
             model.fit(data.X_train, data.y_train)
             fit_s = time.perf_counter() - t0
         pred = model.predict(data.X_test, y_init=data.y_test[:, :data.skip])
-        row = {"damping": damping, "max_iter": args.max_iter, "fit_s": fit_s,
-               "test_rmse_mv": 1e3 * rms_error(data.y_test, pred, skip=data.skip), **cost_trace(model[-1])}
+        final = (model.regressor_ if hasattr(model, "regressor_") else model)[-1]
+        row = {"damping": damping, "max_iter": args.max_iter, "fit_s": fit_s, "unit": data.report_unit,
+               "test_rmse": data.report_scale * rms_error(data.y_test, pred, skip=data.skip), **cost_trace(final)}
         rows.append(row)
-        print(f"wh2009   {damping:8s} {args.max_iter} it: training cost {row['final_cost_db']:7.2f} dB, "
-              f"test {row['test_rmse_mv']:.3f} mV ({fit_s:.0f} s)", flush=True)
-    return rows
-
-
-def cascaded_tanks(args):
-    """The field benchmark's tanks model (as in bench_field.py), 100
-    iterations, scored on the official test split."""
-    from sklearn.pipeline import make_pipeline
-
-    from sklearn_pnlss import BLAEstimator, PNLSSRegressor
-    from sklearn_pnlss.datasets import load_benchmark
-    from sklearn_pnlss.metrics import rms_error
-
-    data = load_benchmark("cascaded_tanks", args.data_dir)
-    rows = []
-    for damping in DAMPINGS:
-        model = make_pipeline(BLAEstimator(2, fs=0.25, offsets=True),
-                              PNLSSRegressor(2, degrees=(2, 3), variables="states", equations="state", max_iter=100))
-        with damping_rule(damping):
-            t0 = time.perf_counter()
-            model.fit(data.X_train, data.y_train)
-            fit_s = time.perf_counter() - t0
-        pred = model.predict(data.X_test, y_init=data.y_test[:, :data.skip])
-        row = {"damping": damping, "fit_s": fit_s, "test_rmse_v": rms_error(data.y_test, pred, skip=data.skip),
-               **cost_trace(model[-1])}
-        rows.append(row)
-        print(f"tanks    {damping:8s} 100 it: training cost {row['final_cost_db']:7.2f} dB, "
-              f"test {row['test_rmse_v']:.3f} V ({fit_s:.1f} s)", flush=True)
-    return rows
-
-
-def emps(args):
-    """The field benchmark's EMPS model (as in bench_field.py: the PNLSS
-    model of the position's increments, summed), 100 iterations, scored on
-    the official test split."""
-    from sklearn.pipeline import make_pipeline
-
-    from sklearn_pnlss import BLAEstimator, IntegratedOutputRegressor, PNLSSRegressor
-    from sklearn_pnlss.datasets import load_benchmark
-    from sklearn_pnlss.metrics import rms_error
-
-    data = load_benchmark("emps", args.data_dir)
-    rows = []
-    for damping in DAMPINGS:
-        model = IntegratedOutputRegressor(make_pipeline(
-            BLAEstimator(2, fs=1000.0, offsets=True),
-            PNLSSRegressor(2, degrees=(2, 3), variables="states_inputs", max_iter=100)))
-        with damping_rule(damping):
-            t0 = time.perf_counter()
-            model.fit(data.X_train, data.y_train)
-            fit_s = time.perf_counter() - t0
-        pred = model.predict(data.X_test, y_init=data.y_test[:, :data.skip])
-        row = {"damping": damping, "fit_s": fit_s, "test_rmse_mm": 1e3 * rms_error(data.y_test, pred, skip=data.skip),
-               **cost_trace(model.regressor_[-1])}
-        rows.append(row)
-        print(f"emps     {damping:8s} 100 it: training cost {row['final_cost_db']:7.2f} dB, "
-              f"test {row['test_rmse_mm']:.2f} mm ({fit_s:.1f} s)", flush=True)
+        print(f"{name:15s} {damping:8s} {args.max_iter} it: training cost {row['final_cost_db']:7.2f} dB, "
+              f"test {row['test_rmse']:.3f} {data.report_unit} ({fit_s:.1f} s)", flush=True)
     return rows
 
 
@@ -186,13 +134,14 @@ def f16(args):
     return rows
 
 
-RUNS = {"wh2009": wh2009, "cascaded_tanks": cascaded_tanks, "emps": emps, "bouc_wen": bouc_wen, "f16": f16}
+RUNS = {**{name: functools.partial(field_benchmark, name) for name in FIELD_MODELS}, "bouc_wen": bouc_wen, "f16": f16}
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--only", nargs="+", choices=sorted(RUNS), default=sorted(RUNS))
-    parser.add_argument("--max-iter", type=int, default=100, help="WH2009 iterations (default: %(default)s)")
+    parser.add_argument("--max-iter", type=int, default=100,
+                        help="iterations of the field benchmarks' fits (default: %(default)s)")
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2], help="Bouc-Wen training seeds")
     parser.add_argument("--data-dir", default=DEFAULT_DATA)
     parser.add_argument("--output", default=RESULTS / "lm_schedule.json")

@@ -80,12 +80,14 @@ if data is not None:
 # The nonlinearity where the physics puts it
 # ------------------------------------------
 # Each tank's outflow depends on its level (Torricelli's law), a state; the
-# pump's flow enters linearly. So the polynomial is in the states and in
-# the state equation only, started from the linear model of the deviations.
+# pump's flow enters linearly. So the polynomial is in the states, started
+# from the linear model of the deviations. The measured level is clipped
+# at 10 V where the lower tank overflows: a nonlinearity of the output map,
+# so the polynomial is in both equations. Fitted until the cost levels off.
 if data is not None:
     start = time.perf_counter()
     pnlss = make_pipeline(BLAEstimator(2, fs=0.25, offsets=True),
-                          PNLSSRegressor(2, degrees=(2, 3), variables="states", equations="state", max_iter=100))
+                          PNLSSRegressor(2, degrees=(2, 3), variables="states", equations="both", max_iter=400))
     pnlss.fit(data.X_train, data.y_train)
     print(f"PNLSS fitted in {time.perf_counter() - start:.1f} s")
 
@@ -96,7 +98,7 @@ if data is not None:
 # outputs show (``y_init``: the only test data a model sees), and the score
 # leaves those 50 samples out. The published test rms errors stand beside.
 if data is not None:
-    models = {"BLA through the origin": origin, "BLA with offsets": offsets, "PNLSS (states, state eq.)": pnlss}
+    models = {"BLA through the origin": origin, "BLA with offsets": offsets, "PNLSS (states, both eqs.)": pnlss}
     predictions = {name: m.predict(data.X_test, y_init=data.y_test[:, :data.skip]) for name, m in models.items()}
     print(f"{'model':30s} {'test rms':>12s} {'NRMSE':>7s} {'fit %':>8s}")
     for name, pred in predictions.items():

@@ -74,11 +74,10 @@ def test_cascaded_tanks_by_the_official_split():
     test record started from the state its first 50 outputs show, those left
     out): the BLA around the operating point (offsets) instead of through
     the origin, and the polynomial where the physics puts it (the outflows
-    depend on the levels, the pump's flow enters linearly), ahead of the
-    BLA; measured 7.11 V, 0.664 V and 0.520 V (benchmarks/bench_field.py),
-    behind the published PNLSS model's 0.45 V (Relan et al. 2017): with the
-    toolbox's damping rule the same fit ended at 0.316 V, from a training
-    cost 0.15 dB lower (the guide's PNLSS page)."""
+    depend on the levels, the pump's flow enters linearly; the measured
+    level is clipped at 10 V, a nonlinearity of the output map), ahead of
+    the published PNLSS model's 0.45 V (Relan et al. 2017); measured 7.11 V,
+    0.664 V and 0.328 V (benchmarks/bench_field.py)."""
     import warnings
 
     from sklearn.pipeline import make_pipeline
@@ -95,10 +94,10 @@ def test_cascaded_tanks_by_the_official_split():
     assert any("offsets=True" in str(w.message) for w in caught)
     bla = BLAEstimator(2, fs=0.25, offsets=True).fit(data.X_train, data.y_train)
     pnlss = make_pipeline(BLAEstimator(2, fs=0.25, offsets=True),
-                          PNLSSRegressor(2, degrees=(2, 3), variables="states", equations="state", max_iter=100))
+                          PNLSSRegressor(2, degrees=(2, 3), variables="states", equations="both", max_iter=400))
     pnlss.fit(data.X_train, data.y_train)
     err = {name: rms_error(data.y_test, model.predict(data.X_test, y_init=window), skip=data.skip)
            for name, model in (("origin", through_origin), ("bla", bla), ("pnlss", pnlss))}
     assert err["origin"] > 5.0  # V: a linear map through the origin misses the levels
     assert err["bla"] < 0.70
-    assert err["pnlss"] < 0.55 and err["pnlss"] < 0.8 * err["bla"]
+    assert err["pnlss"] < 0.40 and err["pnlss"] < 0.6 * err["bla"]  # V; published PNLSS 0.45 V
