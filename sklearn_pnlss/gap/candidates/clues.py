@@ -22,6 +22,7 @@ from scipy.optimize import minimize_scalar
 from ...physics import Oscillator
 from .effect import recalibration_unit
 from .stiffness_start import measured_stiffness_change
+from .trial_columns import TrialColumns
 from ..readings import content_limit, missing_force
 
 __all__ = ["DataClues", "read_clues", "backlash_start", "force_law_start"]
@@ -185,30 +186,24 @@ def _backlash_solve(clues, scales, spring, nominal, free, grid):
     """:func:`backlash_start`'s solve over the evenly spaced clearances
     ``grid``, refined between the best one's neighbours."""
     y, f = clues.displacement, clues.force
-    linear = np.stack(_linear_columns(clues, nominal, scales, free) or [np.zeros_like(f)], 1)
-
-    def solve(basis):
-        A = np.column_stack([basis, linear])
-        coef = np.linalg.lstsq(A, f, rcond=None)[0]
-        return coef, np.sum((f - A @ coef) ** 2)
+    trials = TrialColumns(np.stack(_linear_columns(clues, nominal, scales, free) or [np.zeros_like(f)], 1), f)
 
     def rounded(gap):
         unit = Oscillator(1.0, 0.0, 0.0, forces=(spring(1.0, gap, scales.displacement),))
         return unit.restoring_force(y, np.zeros_like(y))
 
-    best_gap, best_cost = None, np.sum((f - linear @ np.linalg.lstsq(linear, f, rcond=None)[0]) ** 2)
-    for gap in grid:
-        basis = np.sign(y) * np.maximum(np.abs(y) - gap, 0.0)
-        if not basis.any():
-            continue
-        cost = solve(basis)[1]
-        if cost < best_cost:
-            best_gap, best_cost = gap, cost
-    if best_gap is None:
-        return None
+    # every clearance's sharp dead zone fitted at once, a few at a time (an
+    # array of samples by clearances)
+    chunks = np.array_split(grid, max(1, len(grid) // 32))
+    costs = np.concatenate([trials.costs(np.sign(y)[:, None] * np.maximum(np.abs(y)[:, None] - chunk, 0.0))
+                            for chunk in chunks])
+    best = int(np.argmin(costs))
+    if not costs[best] < trials.base_cost:
+        return None  # no clearance explains more than the nominal errors alone
+    best_gap = grid[best]
     step = grid[1] - grid[0]
-    gap = minimize_scalar(lambda g: solve(rounded(g))[1], bounds=(max(best_gap - step, 0.0), best_gap + step),
+    gap = minimize_scalar(lambda g: trials.costs(rounded(g))[0], bounds=(max(best_gap - step, 0.0), best_gap + step),
                           method="bounded", options=dict(xatol=1e-6 * step)).x
-    coef = solve(rounded(gap))[0]
+    coef = trials.solve(rounded(gap))[0]
     # the linear columns are per unit theta: their coefficients are theta
     return np.concatenate([[coef[0] / scales.stiffness, gap / scales.displacement], coef[1:1 + len(free)]])

@@ -19,6 +19,7 @@ import numpy as np
 from ...frequency.bla import periodic_bla
 from ...utils.validation import is_periodic
 from .effect import recalibration_unit
+from .trial_columns import TrialColumns
 
 __all__ = ["StiffnessChange", "measured_stiffness_change", "second_mode_start", "second_mode_joint_start",
            "recalibration_start"]
@@ -119,12 +120,19 @@ def _recalibration_basis(change, nominal, scales, free=("mass", "damping", "stif
     return np.stack(columns, axis=1).astype(complex) if free else np.zeros((change.omega.size, 0))
 
 
+def _real_weighted(change, basis):
+    """The weighted fit of ``basis`` to the change as a real problem:
+    columns and target stacked real over imaginary parts."""
+    w = np.sqrt(change.weight)
+    basis = np.asarray(basis)
+    basis = w[:, None] * (basis[:, None] if basis.ndim == 1 else basis)
+    return np.concatenate([basis.real, basis.imag]), np.concatenate([(w * change.delta).real, (w * change.delta).imag])
+
+
 def _weighted_solve(change, basis):
     """Real coefficients of ``basis`` fitting the change (weighted), and the
     weighted cost left."""
-    w = np.sqrt(change.weight)
-    A = np.concatenate([(w[:, None] * basis).real, (w[:, None] * basis).imag])
-    b = np.concatenate([(w * change.delta).real, (w * change.delta).imag])
+    A, b = _real_weighted(change, basis)
     coef = np.linalg.lstsq(A, b, rcond=None)[0]
     return coef, float(np.sum((A @ coef - b) ** 2))
 
@@ -145,14 +153,21 @@ def second_mode_joint_start(change, nominal, scales, bounds, free, n_grid=400):
     lo, hi = bounds
     linear = _recalibration_basis(change, nominal, scales, free)
     recal, recal_cost = _weighted_solve(change, linear)
+    trials = TrialColumns(*_real_weighted(change, linear))
+    # every grid point's attached mode solved beside the freed parameters
+    # at once (TrialColumns), the best one's coefficients solved again
+    ratios = np.geomspace(max(lo[1], 1e-3), hi[1], n_grid)
+    zetas = np.geomspace(max(lo[2], 1e-3), hi[2], 12)
+    costs = np.array([trials.costs(_real_weighted(change, _attached_oscillator(change.omega[:, None],
+                                                                                ratios * w1, zeta))[0])
+                      for zeta in zetas])
     best, best_cost = None, np.inf
-    for zeta in np.geomspace(max(lo[2], 1e-3), hi[2], 12):
-        for r in np.geomspace(max(lo[1], 1e-3), hi[1], n_grid):
-            h = _attached_oscillator(change.omega, r * w1, zeta)
-            coef, cost = _weighted_solve(change, np.column_stack([h, linear]))
-            if cost < best_cost:
-                mass = float(np.clip(coef[0], lo[0] * nominal.mass, hi[0] * nominal.mass))
-                best, best_cost = np.concatenate([[mass / nominal.mass, r, zeta], coef[1:]]), cost
+    if np.isfinite(costs).any():
+        i, j = np.unravel_index(np.nanargmin(costs), costs.shape)
+        h = _attached_oscillator(change.omega, ratios[j] * w1, zetas[i])
+        coef, best_cost = _weighted_solve(change, np.column_stack([h, linear]))
+        mass = float(np.clip(coef[0], lo[0] * nominal.mass, hi[0] * nominal.mass))
+        best = np.concatenate([[mass / nominal.mass, ratios[j], zetas[i]], coef[1:]])
     if best is None or best_cost > 0.5 * recal_cost:
         # no mode explains half of what the refit leaves: a negligible one
         return np.concatenate([[lo[0], lo[1], 0.3], recal])
