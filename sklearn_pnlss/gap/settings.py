@@ -106,6 +106,11 @@ class GapSettings:
     #: start (the two single fits side by side) the hysteresis' pairs came
     #: first and the right one was lost (family t, both seeds).
     forward_bases: int = 3
+    #: The pairs (and triples) are raced: each gets this many iterations,
+    #: then only the ``race_survivors`` best carry on for the rest of the
+    #: budget (see :func:`~sklearn_pnlss.gap.stages.added_effects`).
+    race_iterations: int = 4
+    race_survivors: int = 3
 
     # -- the verdict -------------------------------------------------------------------
     #: A gap smaller than this above the noise floor is not worth a diagnosis, dB.

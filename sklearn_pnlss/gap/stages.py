@@ -472,11 +472,11 @@ def added_effects(run):
                 raw = raw_base.plus(other)
                 pair = run.composed(raw).variant(starts=_pair_starts(raw_base, base, other, done[other.name]),
                                                  data_starts=[])
-                tasks[raw.name] = run.fit_task(pair, max_nfev=max(3, d.max_nfev // 2), refine=False)
+                tasks[raw.name] = pair
                 raws[raw.name] = raw
         if not tasks:
             return
-        fitted = run.run(tasks)
+        fitted = _raced(run, tasks, max(3, d.max_nfev // 2))
         best = min(fitted, key=lambda name: fitted[name].coarse_mse)
         if not run.adds_to(fitted[best], leader):  # both at the fitting rate (coarse_mse)
             return
@@ -486,6 +486,23 @@ def added_effects(run):
                 f"(the best alone {10 * np.log10(leader.train_mse):.2f} dB)")
         run.combinations.append(refined_best)
         leader, bases = refined_best, [(raws[best], refined_best)]
+
+
+def _raced(run, effects, budget):
+    """Fits of ``effects`` (name -> Effect) at the fitting rate within
+    ``budget`` iterations, raced: every one gets ``SETTINGS.race_iterations``
+    first, and only the ``SETTINGS.race_survivors`` best then carry on, from
+    where they stopped, for the rest of the budget.  The others keep their
+    short fits, far behind: the forward selection's pairs are a dozen or
+    more fits, of which one or two matter."""
+    first = min(SETTINGS.race_iterations, budget)
+    fitted = run.run({name: run.fit_task(e, max_nfev=first, refine=False) for name, e in effects.items()})
+    ahead = sorted(fitted, key=lambda name: fitted[name].coarse_mse)[:SETTINGS.race_survivors]
+    rest = {name: run.fit_task(fitted[name].effect.variant(starts=[fitted[name].theta], data_starts=[]),
+                               max_nfev=budget - first, refine=False)
+            for name in ahead if not fitted[name].converged and budget > first}
+    fitted.update(run.run(rest) if rest else {})
+    return fitted
 
 
 def _pair_starts(raw_base, base, other, other_fit):
