@@ -327,7 +327,8 @@ def hidden_delay(run):
     there, it belongs to the measurement chain and every candidate is
     refitted with it at the fitting rate, from its own fit and from its
     clues aligned at that delay (with half the iterations: most of them
-    start close), and those in contention are refined as after the first
+    start close; raced as the forward selection's pairs, see
+    :func:`_raced`), and those in contention are refined as after the first
     fits (:func:`refine_contenders`; refining every one cost family d's
     stiff backlash 18 s of its 148 s of CPU).  Skipped
     when the best candidate already sits within ``hidden_delay_db`` of the
@@ -375,11 +376,9 @@ def hidden_delay(run):
     run.log(f"the data carry a delay of {1e3 * run.delay.delay_s:.3g} ms, hidden behind {best.name} "
             f"({gain_db:.1f} dB better fit with it); every candidate is refitted with it")
     found = [run.delay.samples]
-    refits = {e.name: run.fit_task(delayed_effect(e, aligned_starts(e, found)), max_nfev=max(3, d.max_nfev // 2),
-                                   refine=False)
-              for e in rest if e is not best}
+    refits = {e.name: delayed_effect(e, aligned_starts(e, found)) for e in rest if e is not best}
     done[best.name] = trial
-    done.update(run.run(refits))
+    done.update(_raced(run, refits, max(3, d.max_nfev // 2)))
     # the effects as refitted, the delay free in each
     run.effects = [e if e.name in measured else done[e.name].effect for e in run.effects]
     refine_contenders(run)  # as after the first fits: the others cannot lead
