@@ -492,8 +492,9 @@ def _raced(run, effects, budget):
     ``budget`` iterations, raced: every one gets ``SETTINGS.race_iterations``
     first, and only the ``SETTINGS.race_survivors`` best then carry on, from
     where they stopped, for the rest of the budget.  The others keep their
-    short fits, far behind: the forward selection's pairs are a dozen or
-    more fits, of which one or two matter."""
+    short fits, far behind: the forward selection's pairs and the refits
+    behind a hidden delay are a dozen or more fits each, of which one or
+    two matter."""
     first = min(SETTINGS.race_iterations, budget)
     fitted = run.run({name: run.fit_task(e, max_nfev=first, refine=False) for name, e in effects.items()})
     ahead = sorted(fitted, key=lambda name: fitted[name].coarse_mse)[:SETTINGS.race_survivors]
