@@ -90,12 +90,9 @@ def models(name):
     # Around an operating point, the BLA through the origin as well: what the offsets buy.
     origin = [("BLA through the origin", {"n_states": n, "offsets": False},
                lambda: BLAEstimator(n, fs=fs))] if offsets else []
-    rows = origin + [
-        ("BLA", {"n_states": n, "offsets": offsets}, lambda: BLAEstimator(n, fs=fs, offsets=offsets)),
-        (label, {"n_states": n, "offsets": offsets, **pnlss},
-         lambda: make_pipeline(BLAEstimator(n, fs=fs, offsets=offsets), PNLSSRegressor(n, **pnlss))),
-    ]
-    for variant, changes in setup.get("variants", {}).items():
+    rows = origin + [("BLA", {"n_states": n, "offsets": offsets}, lambda: BLAEstimator(n, fs=fs, offsets=offsets))]
+    # the model after the BLA, then its variants (the same model, some settings changed)
+    for variant, changes in {label: {}, **setup.get("variants", {})}.items():
         settings = {**pnlss, **changes}
         rows.append((variant, {"n_states": n, "offsets": offsets, **settings},
                      lambda settings=settings: make_pipeline(BLAEstimator(n, fs=fs, offsets=offsets),

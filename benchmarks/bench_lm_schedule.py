@@ -14,8 +14,9 @@ multiplied by 10 on failure) and once with ``damping="nielsen"`` (the
 library's rule, see :mod:`sklearn_pnlss.statespace.levenberg_marquardt`);
 the rule is swapped in for the run (in the fitting engine and in the
 subspace refinement of the linear start), nothing else changes. Printed
-and written to ``benchmarks/results/lm_schedule.json``: the training cost (dB, every tenth iteration and at the end), the test
-error in the benchmark's unit and the fit time.
+and written to ``benchmarks/results/lm_schedule.json``: the training cost
+(dB, every tenth iteration and at the end), the test error in the
+benchmark's unit and the fit time.
 """
 import argparse
 import functools
