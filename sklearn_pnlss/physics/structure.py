@@ -340,12 +340,12 @@ class Structure:
         """The sensors' response to the forces ``forces`` (n_dof, n_forces)
         on the degrees of freedom: (n_freqs, n_sensors, n_forces)."""
         rows, powers = self._sensor_rows(sensors)
-        out = []
-        for f in np.atleast_1d(np.asarray(freqs, dtype=np.float64)):
-            s = 2j * np.pi * f
-            q = np.linalg.solve(s * s * self.mass + s * self.damping + self.stiffness, forces)
-            out.append((rows * s ** powers[:, None]) @ q)
-        return np.array(out)
+        s = 2j * np.pi * np.atleast_1d(np.asarray(freqs, dtype=np.float64))[:, None, None]
+        # one batched solve for every line (a model update evaluates it
+        # hundreds of times)
+        q = np.linalg.solve(s * s * self.mass + s * self.damping + self.stiffness,
+                            np.broadcast_to(forces, (s.shape[0],) + forces.shape))
+        return (rows[None] * s ** powers[None, :, None]) @ q
 
     def _sensor_rows(self, sensors):
         rows, powers = [], []

@@ -25,6 +25,7 @@ from ...utils.parameters import Interval, validates_parameters
 from .locator import ConnectionLocator, band_and_weights
 from .recalibrate import ModalCorrection, recalibrated
 from .refine import BandError, fit_connection
+from .update import ElementUpdate, updated_elements
 
 __all__ = ["StructuralGapDiagnosis", "StructuralGapReport"]
 
@@ -41,6 +42,12 @@ EXPLAINED_DB = 10.0
 #: damping ratio or a shape's scale), at most this many times: a nominal
 #: 10-30 % off is beyond a first-order correction.
 CORRECTION_TOL, CORRECTION_ROUNDS = 0.01, 4
+#: The report names an updated element where its factor is this far from
+#: one (a log-factor: 3 %).
+UPDATE_SHOWN = 0.03
+#: The records whose input is within this factor of the smallest one's rms
+#: are the lowest level, where the nominal is recalibrated.
+LOWEST_LEVEL = 1.1
 #: The laws, by training error after their first fit, fitted again with the
 #: nominal's modes free.
 JOINT_FITS = 2
@@ -76,6 +83,10 @@ class StructuralGapReport:
         nothing but noise is left).
     ranking : list of ConnectionCandidate
         The locator's places, most explaining first.
+    nominal_update : dict or None
+        The factor on each of a lumped nominal's masses, springs and modal
+        damping ratios that ``recalibrate`` fitted on the lowest training
+        level (None: not updated so).
     """
 
     effect_found: bool
@@ -91,6 +102,7 @@ class StructuralGapReport:
     closure: np.ndarray
     left_over_noise_db: np.ndarray
     ranking: list
+    nominal_update: dict = None
 
     @property
     def place_name(self):
@@ -119,6 +131,10 @@ class StructuralGapReport:
                          f"{n:.0f} dB over the noise left")
         lines.append("  places by the share of the training error their force explains: " + ", ".join(
             f"{c.place_name} {c.explained:.0%}" for c in self.ranking))
+        changed = {k: v for k, v in (self.nominal_update or {}).items() if abs(np.log(v)) >= UPDATE_SHOWN}
+        if changed:
+            lines.append("  the nominal updated on the lowest level first: " + ", ".join(
+                f"{name} x{factor:.2f}" for name, factor in changed.items()))
         return "\n".join(lines)
 
 
@@ -160,12 +176,15 @@ class StructuralGapDiagnosis(BaseEstimator):
     transient_periods : int, default=0
         Periods left out at the start of each record.
     recalibrate : bool, default=False
-        Refit the nominal's in-band modes (frequency, damping ratio, shape
-        scale) to the best linear approximation of the training records
-        first (see :mod:`~sklearn_pnlss.gap.connections.recalibrate`).
-        Without it the modes are corrected with every law, around the
-        nominal, which is read again around the leader's corrections until
-        they are small (``CORRECTION_TOL``).
+        Update the nominal on the best linear approximation of the lowest
+        training level first: a lumped nominal's masses, springs and modal
+        damping ratios (see :mod:`~sklearn_pnlss.gap.connections.update`; a
+        model 10-30 % off), a modal one's in-band modes (frequency, damping
+        ratio, shape scale; see
+        :mod:`~sklearn_pnlss.gap.connections.recalibrate`).  Either way the
+        modes are then corrected with every law, around the nominal, which
+        is read again around the leader's corrections until they are small
+        (``CORRECTION_TOL``).
 
     Attributes
     ----------
@@ -179,6 +198,8 @@ class StructuralGapDiagnosis(BaseEstimator):
     linear_ : dict
         The linear change fitted at each simulated place (a ConnectionFit).
     effect_found_ : bool
+    updated_elements_ : dict or None
+        The factors of a lumped nominal's update (see ``recalibrate``).
     nominal_train_error_, recalibrated_train_error_ : ndarray of shape (n_signals,)
         The given and the recalibrated nominal's training errors (rms over
         the rms output in the band, outputs weighted by their noise).
@@ -259,7 +280,7 @@ class StructuralGapDiagnosis(BaseEstimator):
         self : StructuralGapDiagnosis
         """
         spectra = self._locator(self.nominal)._spectra(X, y)  # checked and read once for every round
-        self.nominal_ = self.nominal
+        self.nominal_, self.updated_elements_ = self.nominal, None
         if self.recalibrate:
             self.nominal_ = self._recalibrated(spectra)
         for _ in range(CORRECTION_ROUNDS):
@@ -318,19 +339,29 @@ class StructuralGapDiagnosis(BaseEstimator):
         return fit
 
     def _recalibrated(self, spectra):
-        """The nominal's in-band modes refitted to the best linear
-        approximation of all training records (see
-        :mod:`~sklearn_pnlss.gap.connections.recalibrate`)."""
+        """The nominal updated on the best linear approximation of the
+        lowest training level, the records closest to linear: a lumped
+        nominal's masses and springs (see
+        :mod:`~sklearn_pnlss.gap.connections.update`), a modal one's in-band
+        modes (see :mod:`~sklearn_pnlss.gap.connections.recalibrate`)."""
         if spectra.U.shape[2] != 1:
             raise ValueError("recalibrate=True reads the frequency response of one input force; with "
                              f"{spectra.U.shape[2]} inputs pass recalibrate=False.")
         lines, weights = band_and_weights(spectra, self.f_band)
         U, Y = spectra.U[:, lines, 0], spectra.Y[:, lines]
+        size = np.sqrt(np.mean(np.abs(U) ** 2, axis=1))
+        lowest = size <= LOWEST_LEVEL * size.min()
+        U, Y = U[lowest], Y[lowest]
         power = np.sum(np.abs(U) ** 2, axis=0)
         excited = power > 1e-6 * power.max()
         frf = np.sum(Y[:, excited] * U[:, excited, None].conj(), axis=0) / power[excited, None]
-        return recalibrated(self.nominal, spectra.freqs[lines][excited], frf[:, :, None], weights,
-                            inputs=self.inputs, sensors=self.sensors)
+        freqs = spectra.freqs[lines][excited]
+        if ElementUpdate.of(self.nominal) is not None:
+            updated, self.updated_elements_ = updated_elements(self.nominal, freqs, frf[:, :, None], weights,
+                                                               fs=self.fs, inputs=self.inputs,
+                                                               sensors=self.sensors)
+            return updated
+        return recalibrated(self.nominal, freqs, frf[:, :, None], weights, inputs=self.inputs, sensors=self.sensors)
 
     def _locator(self, nominal):
         return ConnectionLocator(nominal, fs=self.fs, period=self.period, inputs=self.inputs, sensors=self.sensors,
@@ -366,7 +397,8 @@ class StructuralGapDiagnosis(BaseEstimator):
             recalibrated_error=error.relative(recalibrated), connection_error=e1,
             linear_error=error.relative(linear), nominal_nrmse=_per_output(nominal, error.measured),
             connection_nrmse=_per_output(connection, error.measured), closure=1.0 - e1**2 / e0**2,
-            left_over_noise_db=10 * np.log10(left / noise), ranking=list(self.locator_.ranking_))
+            left_over_noise_db=10 * np.log10(left / noise), ranking=list(self.locator_.ranking_),
+            nominal_update=self.updated_elements_)
 
 
 def _simulated(error, structure):
