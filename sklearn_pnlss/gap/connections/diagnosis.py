@@ -341,7 +341,7 @@ class StructuralGapDiagnosis(BaseEstimator):
     def _recalibrated(self, spectra):
         """The nominal updated on the best linear approximation of the
         lowest training level, the records closest to linear: a lumped
-        nominal's masses and springs (see
+        nominal's masses, springs and modal damping ratios (see
         :mod:`~sklearn_pnlss.gap.connections.update`), a modal one's in-band
         modes (see :mod:`~sklearn_pnlss.gap.connections.recalibrate`)."""
         if spectra.U.shape[2] != 1:

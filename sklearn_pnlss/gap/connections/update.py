@@ -205,23 +205,18 @@ def updated_elements(structure, freqs, frf, weights, *, fs, inputs, sensors):
     n_elements = elements.n_params - structure.n_dof
     limit = np.log(np.r_[np.full(n_elements, MAX_FACTOR[0]), np.full(structure.n_dof, MAX_FACTOR[1])])
     bounds = (-limit, limit)
-    nominal_modes = np.sqrt(eigh(*elements.matrices(theta)[::-1], eigvals_only=True))
-    in_band = int(np.sum((nominal_modes >= 2 * np.pi * freqs.min()) & (nominal_modes <= 2 * np.pi * freqs.max())))
-    measured = _measured_frequencies(freqs, frf, max(in_band, 1), fs=fs, sensors=sensors)
+    def natural(t):  # the natural frequencies at log-factors t, rad/s
+        return _modes(*elements.matrices(t))[0]
+
+    in_band = (natural(theta) >= 2 * np.pi * freqs.min()) & (natural(theta) <= 2 * np.pi * freqs.max())
+    measured = _measured_frequencies(freqs, frf, max(int(in_band.sum()), 1), fs=fs, sensors=sensors)
     if measured is not None:
+        pairs = _paired(measured, natural(theta))
         for _ in range(3):  # paired again where the fitted frequencies change the pairing
-            mass, stiffness = elements.matrices(theta)
-            pairs = _paired(measured, np.sqrt(eigh(stiffness, mass, eigvals_only=True)))
-
-            def frequency_misfit(t, pairs=pairs):
-                mass, stiffness = elements.matrices(t)
-                model = np.sqrt(np.abs(eigh(stiffness, mass, eigvals_only=True)))
-                return np.concatenate([np.log(model[pairs[1]] / measured[pairs[0]]), PRICE[0] * t])
-
-            theta = least_squares(frequency_misfit, theta, bounds=bounds).x
-            mass, stiffness = elements.matrices(theta)
-            if all(np.array_equal(a, b) for a, b in zip(
-                    pairs, _paired(measured, np.sqrt(eigh(stiffness, mass, eigvals_only=True))))):
+            theta = least_squares(lambda t, pairs=pairs: np.concatenate(
+                [np.log(natural(t)[pairs[1]] / measured[pairs[0]]), PRICE[0] * t]), theta, bounds=bounds).x
+            previous, pairs = pairs, _paired(measured, natural(theta))
+            if all(np.array_equal(a, b) for a, b in zip(previous, pairs)):
                 break
     theta = least_squares(response_misfit, theta, bounds=bounds, method="trf").x
     if np.sum(response_misfit(theta) ** 2) >= np.sum(response_misfit(np.zeros_like(theta)) ** 2):
