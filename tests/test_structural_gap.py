@@ -36,6 +36,29 @@ def test_a_withheld_backlash_is_named_with_its_place_and_closes_the_gap():
     assert "backlash between middle and tip" in str(report)
 
 
+def test_a_model_10_to_25_percent_off_is_updated_first_and_the_backlash_still_named():
+    """The nominal's masses and springs 10-25 % off (a model never updated
+    on the test): ``recalibrate=True`` updates them on the lowest level,
+    the report lists the update, and the backlash is named at its place,
+    closing at least 90 % of the given nominal's squared error."""
+    element = DeadZoneSpring(3e4, 1e-3)
+    X, Y = _records(element, (20.0, 40.0, 60.0))
+    d = np.array([1.0, -1.0, 0.0])
+    springs = [np.outer(e, e) for e in (np.array([1.0, 0, 0]), d, np.roll(d, 1))]  # ground, base-middle, middle-tip
+    off = Structure(M * np.diag([1.2, 0.85, 1.15]), C, 5e4 * sum(f * k for f, k in zip((0.8, 1.25, 0.9), springs)),
+                    points=POINTS)
+    gap = StructuralGapDiagnosis(off, fs=FS, period=PERIOD, inputs=["base"], sensors=SENSORS, n_places=1,
+                                 recalibrate=True).fit(X, Y)
+    report = gap.report(*_records(element, (30.0, 50.0), seed=1))
+    assert report.effect_found and set(report.place) == {"middle", "tip"} and report.law == "backlash"
+    assert np.all(report.closure > 0.9)
+    # the elements away from the backlash come back to the chain's (the
+    # spring beside it takes up what the backlash does at the lowest level)
+    assert report.nominal_update["spring base - middle"] == pytest.approx(1 / 1.25, rel=0.05)
+    assert report.nominal_update["mass base"] == pytest.approx(1 / 1.2, rel=0.05)
+    assert "the nominal updated on the lowest level first" in str(report)
+
+
 def test_no_connection_is_claimed_on_a_linear_chain():
     """No effect: the nominal's error is the integration's (2 % of the
     output), no law beats a linear change by the margin, nothing is claimed."""
