@@ -6,9 +6,10 @@ two-storey frame (two columns of two masses, floors joined by beams); one
 nonlinear element at one of its joints (between two masses, or a mass and
 the ground); a shaker force at a mass; accelerometers at the joint's points
 and the driving point, and one more where that makes fewer than two or
-three (a ground vibration test always senses the driving point); a periodic multisine (1-80 Hz, 200 Hz, three
-periods) at three training and two validation levels, integrated at 20
-times the data rate, with white noise of 1 % of each channel's rms.  The
+three (a ground vibration test always senses the driving point); a
+periodic multisine (1-80 Hz, 200 Hz, three periods) at three training and
+two validation levels, integrated at 20 times the data rate, with white
+noise of 1 % of each channel's rms.  The
 element's strength is drawn so that the nominal misses the top level by
 -20 to -8 dB of the output.
 
@@ -18,8 +19,8 @@ The diagnosis gets one of three nominals: the true linear structure
 only test data); or the true matrices with every mass and spring 10-30 %
 off (``off``), a model never updated on the test, which the diagnosis
 updates first (``recalibrate=True``: its masses, springs and modal damping
-on the lowest level, :mod:`sklearn_pnlss.gap.connections.update`).  Cases without an element must not be
-claimed (no false alarm); a Bouc-Wen hysteresis, which no candidate law
+on the lowest level, :mod:`sklearn_pnlss.gap.connections.update`).  Cases
+without an element must not be claimed (no false alarm); a Bouc-Wen hysteresis, which no candidate law
 is, is scored on the place (``hysteresis``), and should leave more than
 ``EXPLAINED_DB`` over the noise.
 

@@ -19,7 +19,7 @@ from ..statespace.subspace import fd_subspace
 from ..utils.validation import as_signal_list, check_period
 from .readings import measured_frf
 
-__all__ = ["ModalFit", "fit_modes", "modal_nominal"]
+__all__ = ["ModalFit", "fit_modes", "modal_nominal", "subspace_poles"]
 
 #: How far outside the fitted band a mode may sit (factors of its edges).
 BAND_MARGIN = (0.8, 1.25)
@@ -170,14 +170,20 @@ def fit_modes(freqs, frf, n_modes, *, fs, kind="acceleration"):
                     error)
 
 
+def subspace_poles(w, G, order, fs):
+    """The continuous-time poles (rad/s) of a frequency-domain subspace
+    model of order ``order`` of an FRF ``G`` (n_freqs, n_outputs) at the
+    frequencies ``w`` (rad/s) of data sampled at ``fs``."""
+    A = fd_subspace(G[:, :, None], np.exp(1j * w / fs), int(order), estimate_d=True)[0]
+    return np.log(np.linalg.eigvals(A).astype(complex)) * fs
+
+
 def _start(w, G, n_modes, fs):
     """Starting poles: the ``n_modes`` least damped oscillating poles of a
     subspace model of the FRF (order twice the modes) inside the band."""
-    z = np.exp(1j * w / fs)
     found = []
     for extra in (0, 2, 4):
-        A = fd_subspace(G[:, :, None], z, 2 * n_modes + extra, estimate_d=True)[0]
-        s = np.log(np.linalg.eigvals(A).astype(complex)) * fs
+        s = subspace_poles(w, G, 2 * n_modes + extra, fs)
         s = s[(s.imag > 0) & (s.imag >= w.min() * 0.9) & (s.imag <= w.max() * 1.1)]
         if s.size >= n_modes:
             found = s[np.argsort(-s.real / np.abs(s))[:n_modes]]

@@ -34,13 +34,14 @@ frequencies alone leave directions free, and the response at a few sensors
 does not see every mass.
 """
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from scipy.linalg import eigh
 from scipy.optimize import least_squares
 
 from ...physics.structure import SENSOR_KINDS, Structure
-from ...statespace.subspace import fd_subspace
+from ..modal_nominal import subspace_poles
 
 __all__ = ["ElementUpdate", "updated_elements"]
 
@@ -104,18 +105,20 @@ class ElementUpdate:
                 + [f"spring {points[i]} - {'ground' if j is None else points[j]}" for i, j, _ in self.springs]
                 + [f"damping ratio of mode {i + 1}" for i in range(self.structure.n_dof)])
 
+    @cached_property
+    def _directions(self):
+        """Each spring's direction as a column (n_dof, n_springs): its
+        stiffness matrix is ``k d d^T``."""
+        points = self.structure.points
+        return np.stack([self.structure.direction(points[i], None if j is None else points[j])
+                         for i, j, _ in self.springs], axis=1)
+
     def matrices(self, theta):
         """The mass and stiffness matrices at the log-factors ``theta``."""
-        n = self.structure.n_dof
+        n, n_springs = self.structure.n_dof, len(self.springs)
         mass = np.diag(np.diag(self.structure.mass) * np.exp(theta[:n]))
-        stiffness = np.zeros((n, n))
-        for (i, j, k), t in zip(self.springs, theta[n:n + len(self.springs)]):
-            d = np.zeros(n)
-            d[i] = 1.0
-            if j is not None:
-                d[j] = -1.0
-            stiffness += k * np.exp(t) * np.outer(d, d)
-        return mass, stiffness
+        k = np.array([k for _, _, k in self.springs]) * np.exp(theta[n:n + n_springs])
+        return mass, (self._directions * k) @ self._directions.T
 
     def applied(self, theta):
         """The structure with its elements' factors ``exp(theta)``."""
@@ -205,10 +208,12 @@ def updated_elements(structure, freqs, frf, weights, *, fs, inputs, sensors):
     n_elements = elements.n_params - structure.n_dof
     limit = np.log(np.r_[np.full(n_elements, MAX_FACTOR[0]), np.full(structure.n_dof, MAX_FACTOR[1])])
     bounds = (-limit, limit)
+
     def natural(t):  # the natural frequencies at log-factors t, rad/s
         return _modes(*elements.matrices(t))[0]
 
-    in_band = (natural(theta) >= 2 * np.pi * freqs.min()) & (natural(theta) <= 2 * np.pi * freqs.max())
+    nominal = natural(theta)
+    in_band = (nominal >= 2 * np.pi * freqs.min()) & (nominal <= 2 * np.pi * freqs.max())
     measured = _measured_frequencies(freqs, frf, max(int(in_band.sum()), 1), fs=fs, sensors=sensors)
     if measured is not None:
         pairs = _paired(measured, natural(theta))
@@ -234,14 +239,12 @@ def _measured_frequencies(freqs, frf, n_modes, *, fs, sensors):
     w = 2 * np.pi * freqs
     s = 1j * w[:, None]
     powers = np.array([SENSOR_KINDS.index(kind) for _, kind in sensors])
-    acceleration = (frf[:, :, 0] * s ** (2 - powers))[:, :, None]
-    z = np.exp(1j * w / fs)
+    acceleration = frf[:, :, 0] * s ** (2 - powers)
     found = []
     for order in 2 * n_modes + 2 * np.arange(STABLE_ORDERS):
         if order >= w.size:
             break
-        poles = np.log(np.linalg.eigvals(fd_subspace(acceleration, z, int(order), estimate_d=True)[0])
-                       .astype(complex)) * fs
+        poles = subspace_poles(w, acceleration, order, fs)
         poles = poles[(poles.imag > 0) & (poles.imag >= w.min()) & (poles.imag <= w.max())
                       & (-poles.real < MAX_DAMPING * np.abs(poles))]
         found.append(np.sort(np.abs(poles)))
