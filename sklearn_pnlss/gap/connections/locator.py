@@ -204,6 +204,10 @@ class ConnectionLocator(BaseEstimator):
     nominal_error_ : ndarray of shape (n_signals,)
         The nominal's rms error over the rms output in the band, per
         training record (outputs weighted by their noise).
+    unexplained_ : float
+        The weighted error energy ``best_`` leaves, summed over the records
+        (comparable between nominals, where ``explained`` is a share of each
+        one's own error).
 
     Examples
     --------
@@ -315,6 +319,7 @@ class ConnectionLocator(BaseEstimator):
         self.ranking_ = sorted(ranking, key=lambda c: -c.explained)
         self.candidates_.sort(key=lambda c: -c.explained)
         self.best_ = self.ranking_[0]
+        self.unexplained_ = float((1.0 - self.best_.explained) * np.sum(np.abs(error) ** 2))
         return self
 
     def _spectra(self, X, y):

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
+from ...physics.prewarp import prewarped, rate_correction
 from ...physics.resampling import decimate_columns, upsample_fft
 from ...physics.structure import Connection
 from ...utils.threads import each_in_threads
@@ -59,16 +60,25 @@ class BandError:
         self.u_fine = [np.stack([upsample_fft(np.fft.irfft(U[:, j], spectra.period), oversampling, periodic=True)
                                  for j in range(U.shape[1])], axis=1) for U in spectra.U]
         self.measured = spectra.Y[:, lines] * weights
+        # the integrator's rates made continuous, per line (see
+        # physics.prewarp), with the outputs' weights
+        fs_fine = spectra.fs * self.oversampling
+        self._out_factors = rate_correction(spectra.freqs[lines], fs_fine, self.sensors) * weights
         self.n_simulations = 0
         # each record's last steady state: the next trial point's search
         # starts there (a neighbouring structure's orbit is close to it)
-        self._starts = [None] * len(self.u_fine)
+        self.forget_starts()
 
     def simulate(self, structure):
         """Each record's simulated output spectra at the band's lines,
         weighted: (n_signals, n_lines, n_outputs); FloatingPointError when a
-        simulation diverges."""
+        simulation diverges.
+
+        The structure is simulated prewarped (see
+        :mod:`~sklearn_pnlss.physics.prewarp`): the continuous structure's
+        response, not Newmark's at a few steps per sample."""
         fs_fine, decimation = self.spectra.fs * self.oversampling, prime_factors(self.oversampling)
+        structure = prewarped(structure, fs_fine)
 
         def one(u_fine, start):
             if start is not None and start.size != 3 * structure.n_dof + 2 * structure.n_internal_states:
@@ -79,15 +89,28 @@ class BandError:
                 sim = structure.simulate_fine(u_fine, fs=fs_fine, inputs=self.inputs, periodic=True,
                                               initial_state=start, warn=False, max_periods=FIT_MAX_PERIODS)
             y = decimate_columns(structure.measure(sim, self.sensors), decimation, periodic=True)
-            return np.fft.rfft(y, axis=0)[self.lines] * self.weights, sim.final_state
+            return np.fft.rfft(y, axis=0)[self.lines] * self._out_factors, sim.final_state
 
         self.n_simulations += 1
-        results = each_in_threads(one, self.u_fine, self._starts)
-        out = np.array([r[0] for r in results])
-        if not np.all(np.isfinite(out)):
-            raise FloatingPointError("the simulation diverged.")
+        try:
+            results = each_in_threads(one, self.u_fine, self._starts)
+            out = np.array([r[0] for r in results])
+            if not np.all(np.isfinite(out)):
+                raise FloatingPointError("the simulation diverged.")
+        except (FloatingPointError, ValueError, np.linalg.LinAlgError):
+            if all(s is None for s in self._starts):
+                raise
+            # a start on another structure's orbit (a large one, of a trial
+            # point far off) can throw a stiff law off; from rest, once more
+            self.forget_starts()
+            return self.simulate(structure)
         self._starts = [r[1] for r in results]
         return out
+
+    def forget_starts(self):
+        """The next simulation starts from rest (a new fit's structure is
+        not a neighbour of the last one simulated)."""
+        self._starts = [None] * len(self.u_fine)
 
     def residuals(self, structure):
         """Real and imaginary parts of the weighted error, flattened."""
@@ -196,6 +219,7 @@ def fit_connection(nominal, candidate, error, *, scales, max_nfev=20, correction
         return error.residuals(structure) / size
 
     first = error.n_simulations
+    error.forget_starts()
     # the locator's coefficients, and its nonlinear element alone: a large
     # linear change read off the measured motion can make the simulated
     # structure unstable, where the element alone is not
