@@ -120,6 +120,9 @@ class BandError:
         except (FloatingPointError, ValueError, np.linalg.LinAlgError):
             e = None
         if e is None or np.sqrt(np.mean(np.abs(e) ** 2)) > _PENALTY * size:  # running away
+            # its orbit is no start for the next trial point (from there a
+            # stiff law ran away at every step of a Jacobian)
+            self.forget_starts()
             return np.full(2 * self.measured.size, _PENALTY * size)
         return np.concatenate([e.real, e.imag])
 
