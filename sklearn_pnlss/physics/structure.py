@@ -17,7 +17,7 @@ from sklearn.exceptions import ConvergenceWarning
 from ._shooting import PeriodShooter
 from ._structure_run import structure_run
 from .forces import KIND_CUSTOM, ForceElement, pack_forces
-from .oscillator import _NEWTON_MAX_ITER, _NEWTON_RTOL, _SHOOT_AFTER, _futile, _positive_real
+from .oscillator import _NEWTON_MAX_ITER, _NEWTON_RTOL, _SHOOT_AFTER, _check_bound, _futile, _positive_real
 from .resampling import check_signal, decimate_columns, upsample_fft
 
 __all__ = ["Connection", "Structure", "StructureSimulation", "SENSOR_KINDS"]
@@ -390,7 +390,7 @@ class Structure:
         return np.r_[0:2 * n, 3 * n:3 * n + nz]
 
     def simulate_fine(self, u_fine, *, fs, inputs, periodic=False, tol=1e-9, max_periods=50,
-                      initial_state=None, warn=True):
+                      initial_state=None, warn=True, max_abs=None):
         """Simulate at the integration rate.
 
         Parameters
@@ -411,6 +411,10 @@ class Structure:
             A ``final_state`` to start from (default: rest).
         warn : bool, default=True
             Warn when the steady state is not reached.
+        max_abs : float, default=None
+            A bound on every point's displacement, checked after each
+            period: FloatingPointError once it is exceeded (a trial point
+            that runs away stops at once, not after its last period).
 
         Returns
         -------
@@ -445,6 +449,7 @@ class Structure:
         while period < max_periods:
             start = state.copy()
             y, yd, ydd, z, failed = run(state, init, n)
+            _check_bound(y @ self.point_matrix.T, max_abs)
             init, period, total_failed = False, period + 1, total_failed + failed
             traces = [y[:, j] for j in range(n_dof)] + [yd[:, j] for j in range(n_dof)] + [z[:, j] for j in range(nz)]
             scale = np.array([max(np.max(np.abs(t)), 1e-300) for t in traces])

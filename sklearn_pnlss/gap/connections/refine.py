@@ -16,7 +16,7 @@ from scipy.optimize import least_squares
 
 from ...physics.prewarp import prewarped, rate_correction
 from ...physics.resampling import decimate_columns, upsample_fft
-from ...physics.structure import Connection
+from ...physics.structure import SENSOR_KINDS, Connection
 from ...utils.threads import each_in_threads
 from ..fitting.simulate import FIT_MAX_PERIODS, prime_factors
 
@@ -64,6 +64,12 @@ class BandError:
         # physics.prewarp), with the outputs' weights
         fs_fine = spectra.fs * self.oversampling
         self._out_factors = rate_correction(spectra.freqs[lines], fs_fine, self.sensors) * weights
+        # a trial point whose sensed displacements run _PENALTY times past
+        # the measured ones' is stopped after a period (else it ran every
+        # period the steady-state search allows: a second a trial)
+        orders = np.array([SENSOR_KINDS.index(kind) for _, kind in self.sensors])
+        displacement = np.abs(spectra.Y[:, lines]) / (2 * np.pi * spectra.freqs[lines, None]) ** orders
+        self._max_abs = _PENALTY * np.sqrt(2 * np.max(np.sum(displacement**2, axis=1))) / spectra.period
         self.n_simulations = 0
         # each record's last steady state: the next trial point's search
         # starts there (a neighbouring structure's orbit is close to it)
@@ -87,7 +93,8 @@ class BandError:
                 # a trial point that does not settle is judged by its misfit
                 warnings.simplefilter("ignore")
                 sim = structure.simulate_fine(u_fine, fs=fs_fine, inputs=self.inputs, periodic=True,
-                                              initial_state=start, warn=False, max_periods=FIT_MAX_PERIODS)
+                                              initial_state=start, warn=False, max_periods=FIT_MAX_PERIODS,
+                                              max_abs=self._max_abs)
             y = decimate_columns(structure.measure(sim, self.sensors), decimation, periodic=True)
             return np.fft.rfft(y, axis=0)[self.lines] * self._out_factors, sim.final_state
 
