@@ -23,9 +23,9 @@ from sklearn.utils.validation import check_is_fitted
 
 from ...utils.parameters import Interval, validates_parameters
 from .locator import ConnectionLocator, band_and_weights
-from .recalibrate import ModalCorrection, recalibrated
+from .recalibrate import recalibrated
 from .refine import BandError, fit_connection
-from .update import ElementUpdate, updated_elements
+from .update import ElementUpdate, linear_corrections, updated_elements
 
 __all__ = ["StructuralGapDiagnosis", "StructuralGapReport"]
 
@@ -42,6 +42,9 @@ EXPLAINED_DB = 10.0
 #: damping ratio or a shape's scale), at most this many times: a nominal
 #: 10-30 % off is beyond a first-order correction.
 CORRECTION_TOL, CORRECTION_ROUNDS = 0.01, 4
+#: A round's step is halved this many times at most where it leaves more
+#: error (a friction's first step overshot a spring by a factor 1.5).
+STEP_HALVINGS = 2
 #: The report names an updated element where its factor is this far from
 #: one (a log-factor: 3 %).
 UPDATE_SHOWN = 0.03
@@ -288,13 +291,14 @@ class StructuralGapDiagnosis(BaseEstimator):
             corrections = self.locator_.best_.corrections
             if corrections is None or np.max(np.abs(corrections), initial=0.0) < CORRECTION_TOL:
                 break
-            # the modal corrections are first-order: made exactly, the
-            # nominal is read again around them (Gauss-Newton on the modes),
-            # the step kept only where it leaves less error (a strong law's
-            # action, read in part as corrections, made them overshoot and
-            # then diverge: 5 %, 20 %, 127 % on a mode's damping)
-            again = self._locator(self.locator_.nominal_for(self.locator_.best_))._fit_spectra(spectra)
-            if again.unexplained_ >= self.locator_.unexplained_:
+            # the corrections (of the elements or the modes) are
+            # first-order: made exactly, the nominal is read again around
+            # them (Gauss-Newton), a step kept only where it leaves less
+            # error (a strong law's action, read in part as corrections,
+            # made them overshoot and then diverge: 5 %, 20 %, 127 % on a
+            # mode's damping)
+            again = self._stepped(spectra, corrections)
+            if again is None:
                 break
             self.locator_ = again
         self.nominal_ = self.locator_.nominal
@@ -332,12 +336,23 @@ class StructuralGapDiagnosis(BaseEstimator):
                                   <= MAX_ERROR_RATIO * np.mean(linear.train_error**2))
         return self
 
+    def _stepped(self, spectra, corrections):
+        """The locator read again around its leader's corrections made, the
+        step halved while it leaves more error than the locator now does
+        (at most ``STEP_HALVINGS`` times); None where no step helps."""
+        for k in range(STEP_HALVINGS + 1):
+            nominal = self.locator_.correction_.applied(corrections / 2**k)
+            again = self._locator(nominal)._fit_spectra(spectra)
+            if again.unexplained_ < self.locator_.unexplained_:
+                return again
+        return None
+
     def _joint(self, fit, error, freqs):
         """``fit`` refined again from where it ended, the modal corrections
         of its nominal free as well; kept where it lowers the error."""
         start = self.locator_.nominal_for(fit.candidate)
         located = replace(fit.candidate, parameters=dict(fit.parameters))
-        correction = ModalCorrection(start, freqs, inputs=self.inputs, sensors=self.sensors)
+        correction = linear_corrections(start, freqs, inputs=self.inputs, sensors=self.sensors)
         joint = fit_connection(start, located, error, scales=self.locator_.rms_[fit.place], max_nfev=self.max_nfev,
                                correction=correction)
         if np.mean(joint.train_error**2) < np.mean(fit.train_error**2):

@@ -40,7 +40,7 @@ from sklearn.utils.validation import check_is_fitted
 from ...physics.structure import SENSOR_KINDS, Structure
 from ...utils.parameters import Interval, validates_parameters
 from .laws import LAW_NAMES, force_laws
-from .recalibrate import ModalCorrection
+from .update import linear_corrections
 from .spectra import PeriodSpectra
 
 __all__ = ["ConnectionLocator", "ConnectionCandidate", "band_and_weights"]
@@ -293,7 +293,7 @@ class ConnectionLocator(BaseEstimator):
         self.input_response_ = self.nominal.frequency_response(freqs, inputs=list(self.inputs),
                                                                sensors=list(self.sensors))
         self.input_freqs_ = freqs
-        self.correction_ = (ModalCorrection(self.nominal, freqs, inputs=self.inputs, sensors=self.sensors)
+        self.correction_ = (linear_corrections(self.nominal, freqs, inputs=self.inputs, sensors=self.sensors)
                             if self.modal_corrections else None)
         error = self._weighted_error(spectra)
         self.nominal_error_ = np.sqrt(np.sum(np.abs(error) ** 2, axis=(1, 2)) / np.sum(

@@ -42,8 +42,9 @@ from scipy.optimize import least_squares
 
 from ...physics.structure import SENSOR_KINDS, Structure
 from ..modal_nominal import subspace_poles
+from .recalibrate import ModalCorrection
 
-__all__ = ["ElementUpdate", "updated_elements"]
+__all__ = ["ElementCorrection", "ElementUpdate", "linear_corrections", "updated_elements"]
 
 #: Price of a change of an element's log-factor, as a residual: a factor e
 #: costs as much as a natural frequency 5 % off in the first stage, and a
@@ -83,8 +84,8 @@ class ElementUpdate:
         """The elements of ``structure``, or None where it is not lumped (a
         modal structure, a full mass matrix)."""
         m, k = structure.mass, structure.stiffness
-        lumped = (np.allclose(structure.point_matrix, np.eye(len(m))) and np.allclose(m, np.diag(np.diag(m)))
-                  and len(m) > 0)
+        lumped = (len(m) > 0 and structure.point_matrix.shape == m.shape
+                  and np.allclose(structure.point_matrix, np.eye(len(m))) and np.allclose(m, np.diag(np.diag(m))))
         if not lumped:
             return None
         tol = 1e-12 * np.max(np.abs(k), initial=0.0)
@@ -252,3 +253,63 @@ def _measured_frequencies(freqs, frf, n_modes, *, fs, sensors):
         return None
     stable = [p for p in found[0] if all(np.any(np.abs(q / p - 1) < STABLE_TOL) for q in found[1:])]
     return np.array(stable) if stable else None
+
+
+class ElementCorrection:
+    """Small changes of a lumped structure's elements, to first order: its
+    masses, springs and modal damping ratios (as :class:`ElementUpdate`),
+    fitted with a connection's force law over every level.
+
+    The counterpart of
+    :class:`~sklearn_pnlss.gap.connections.recalibrate.ModalCorrection`
+    for a structure whose elements are known: an update on the lowest level
+    alone takes in what a nonlinearity does there (a friction that nearly
+    locks its joint drove the joint's spring and a mass to their bounds),
+    and only a fit with the law, level by level, gives it back.  A
+    structure's elements also bind its modes to each other, where free
+    modes take in part of a law's action.
+
+    Parameters
+    ----------
+    structure : Structure
+        Lumped (:meth:`ElementUpdate.of` is not None).
+    freqs : ndarray of shape (n_freqs,)
+        The band's frequencies, Hz.
+    inputs, sensors : as :class:`~sklearn_pnlss.gap.connections.ConnectionLocator`
+    """
+
+    #: Log-factor step of the response's derivatives by differences.
+    STEP = 1e-6
+
+    def __init__(self, structure, freqs, *, inputs, sensors):
+        self.elements = ElementUpdate.of(structure)
+        theta = np.zeros(self.elements.n_params)
+
+        def response(t):
+            return self.elements.applied(t).frequency_response(freqs, inputs=inputs, sensors=sensors)
+
+        base = response(theta)
+        self.jacobian = np.stack([(response(self.STEP * e) - base) / self.STEP for e in np.eye(theta.size)],
+                                 axis=3)
+
+    @property
+    def n_params(self):
+        return self.elements.n_params
+
+    def columns(self, U):
+        """The changes of the outputs' spectra per parameter for input
+        spectra ``U`` (n_freqs, n_inputs): (n_freqs, n_outputs, n_params)."""
+        return np.einsum("foip,fi->fop", self.jacobian, U)
+
+    def applied(self, theta):
+        """The structure with its elements' factors ``exp(theta)``."""
+        return self.elements.applied(np.asarray(theta, float))
+
+
+def linear_corrections(structure, freqs, *, inputs, sensors):
+    """The first-order linear corrections a law is fitted with: a lumped
+    structure's elements (:class:`ElementCorrection`), else its in-band
+    modes (:class:`~sklearn_pnlss.gap.connections.recalibrate.ModalCorrection`)."""
+    if ElementUpdate.of(structure) is not None:
+        return ElementCorrection(structure, freqs, inputs=inputs, sensors=sensors)
+    return ModalCorrection(structure, freqs, inputs=inputs, sensors=sensors)
