@@ -94,7 +94,7 @@ def test_a_linear_structure_leaves_only_noise_to_explain():
     assert np.all(loc.nominal_error_ < 0.025)
     assert max(c.nonlinear_gain for c in loc.ranking_) < 1e-3
     plain = ConnectionLocator(Structure(M, C, K, points=POINTS), fs=FS, period=PERIOD, inputs=["base"],
-                              sensors=SENSORS, modal_corrections=False).fit(X, Y)
+                              sensors=SENSORS, linear_corrections=False).fit(X, Y)
     assert max(c.nonlinear_gain for c in plain.ranking_) < 0.025
 
 

@@ -37,10 +37,10 @@ MAX_ERROR_RATIO = 0.7
 #: A connection explains the gap fully where it leaves at most this much
 #: over the noise (a factor of about three in rms).
 EXPLAINED_DB = 10.0
-#: The locator is run again around its leader's modal corrections, made
-#: exactly, until they are below this (a log-factor: 1 % on a frequency, a
-#: damping ratio or a shape's scale), at most this many times: a nominal
-#: 10-30 % off is beyond a first-order correction.
+#: The locator is run again around its leader's linear corrections, made
+#: exactly, until they are below this (a log-factor: 1 % on a mass, a
+#: spring, a frequency, a damping ratio or a shape's scale), at most this
+#: many times: a nominal 10-30 % off is beyond a first-order correction.
 CORRECTION_TOL, CORRECTION_ROUNDS = 0.01, 4
 #: A round's step is halved this many times at most where it leaves more
 #: error (a friction's first step overshot a spring by a factor 1.5).
@@ -52,7 +52,7 @@ UPDATE_SHOWN = 0.03
 #: are the lowest level, where the nominal is recalibrated.
 LOWEST_LEVEL = 1.1
 #: The laws, by training error after their first fit, fitted again with the
-#: nominal's modes free.
+#: nominal's linear corrections (elements or modes) free.
 JOINT_FITS = 2
 
 
@@ -185,9 +185,9 @@ class StructuralGapDiagnosis(BaseEstimator):
         model 10-30 % off), a modal one's in-band modes (frequency, damping
         ratio, shape scale; see
         :mod:`~sklearn_pnlss.gap.connections.recalibrate`).  Either way the
-        modes are then corrected with every law, around the nominal, which
-        is read again around the leader's corrections until they are small
-        (``CORRECTION_TOL``).
+        elements or the modes are then corrected with every law, over every
+        level, around the nominal, which is read again around the leader's
+        corrections until they are small (``CORRECTION_TOL``).
 
     Attributes
     ----------
@@ -246,7 +246,7 @@ class StructuralGapDiagnosis(BaseEstimator):
     """
 
     _parameter_constraints = {
-        **{k: v for k, v in ConnectionLocator._parameter_constraints.items() if k != "modal_corrections"},
+        **{k: v for k, v in ConnectionLocator._parameter_constraints.items() if k != "linear_corrections"},
         "n_places": [Interval(Integral, 1, None, closed="left")],
         "oversampling": [Interval(Integral, 1, None, closed="left")],
         "max_nfev": [Interval(Integral, 1, None, closed="left")],
@@ -318,7 +318,7 @@ class StructuralGapDiagnosis(BaseEstimator):
             fits = list(self.linear_.values())
         fits = sorted(fits, key=lambda f: np.mean(f.train_error**2))
         # the leaders and the linear changes at their places again, with the
-        # nominal's modes free too: the law's linear part and the modal
+        # nominal's corrections free too: the law's linear part and the
         # corrections trade against each other, and only a joint fit by
         # simulation settles them (a cubic spring otherwise lost to a
         # backlash by 2 % of the error, both 12 % of the output off)
@@ -348,7 +348,7 @@ class StructuralGapDiagnosis(BaseEstimator):
         return None
 
     def _joint(self, fit, error, freqs):
-        """``fit`` refined again from where it ended, the modal corrections
+        """``fit`` refined again from where it ended, the linear corrections
         of its nominal free as well; kept where it lowers the error."""
         start = self.locator_.nominal_for(fit.candidate)
         located = replace(fit.candidate, parameters=dict(fit.parameters))

@@ -85,8 +85,8 @@ class ConnectionCandidate:
     linear_explained : float
         The share a stiffness and damping change at the same place explains.
     corrections : ndarray or None
-        The nominal's modal corrections fitted with the law (see
-        :class:`~sklearn_pnlss.gap.connections.recalibrate.ModalCorrection`).
+        The nominal's linear corrections fitted with the law (see
+        ``linear_corrections``).
     """
 
     place: tuple
@@ -181,11 +181,15 @@ class ConnectionLocator(BaseEstimator):
         the lines the input excites.
     transient_periods : int, default=0
         Periods at the start of each record left out.
-    modal_corrections : bool, default=True
-        Fit small changes of the nominal's in-band modes (frequency,
-        damping ratio, shape scale; the same at every level) with every
-        law: the nominal's own linear error, which a law fitted alone
-        absorbs in part.
+    linear_corrections : bool, default=True
+        Fit small changes of the nominal (the same at every level) with
+        every law: the nominal's own linear error, which a law fitted alone
+        absorbs in part.  A lumped nominal's are its elements' (masses,
+        springs, modal damping ratios:
+        :class:`~sklearn_pnlss.gap.connections.update.ElementCorrection`),
+        a modal one's its in-band modes' (frequency, damping ratio, shape
+        scale:
+        :class:`~sklearn_pnlss.gap.connections.recalibrate.ModalCorrection`).
 
     Attributes
     ----------
@@ -251,11 +255,11 @@ class ConnectionLocator(BaseEstimator):
         "laws": [list, tuple, None],
         "f_band": [tuple, list, None],
         "transient_periods": [Interval(Integral, 0, None, closed="left")],
-        "modal_corrections": ["boolean"],
+        "linear_corrections": ["boolean"],
     }
 
     def __init__(self, nominal, *, fs, period, inputs, sensors, places=None, laws=None, f_band=None,
-                 transient_periods=0, modal_corrections=True):
+                 transient_periods=0, linear_corrections=True):
         self.nominal = nominal
         self.fs = fs
         self.period = period
@@ -265,7 +269,7 @@ class ConnectionLocator(BaseEstimator):
         self.laws = laws
         self.f_band = f_band
         self.transient_periods = transient_periods
-        self.modal_corrections = modal_corrections
+        self.linear_corrections = linear_corrections
 
     # -- fitting ------------------------------------------------------------
     @validates_parameters
@@ -294,7 +298,7 @@ class ConnectionLocator(BaseEstimator):
                                                                sensors=list(self.sensors))
         self.input_freqs_ = freqs
         self.correction_ = (linear_corrections(self.nominal, freqs, inputs=self.inputs, sensors=self.sensors)
-                            if self.modal_corrections else None)
+                            if self.linear_corrections else None)
         error = self._weighted_error(spectra)
         self.nominal_error_ = np.sqrt(np.sum(np.abs(error) ** 2, axis=(1, 2)) / np.sum(
             np.abs(spectra.Y[:, self.lines_] * self.output_weights_) ** 2, axis=(1, 2)))
@@ -392,13 +396,13 @@ class ConnectionLocator(BaseEstimator):
         return cols.reshape(-1, F.shape[1])
 
     def _correction_columns(self, spectra, index):
-        """The modal corrections' design columns of record ``index``,
+        """The linear corrections' design columns of record ``index``,
         weighted like the error (n_lines * n_outputs, n_params)."""
         cols = self.correction_.columns(spectra.U[index, self.lines_]) * self.output_weights_[None, :, None]
         return cols.reshape(-1, self.correction_.n_params)
 
     def _fit_law(self, law, place, data, error, corrections):
-        """The law's coefficients, and the modal corrections with them (the
+        """The law's coefficients, and the linear corrections with them (the
         columns ``corrections`` of each record, or None)."""
         n = error.shape[0]
         A = np.concatenate([self._columns(law, data, i) if corrections is None else
@@ -419,7 +423,7 @@ class ConnectionLocator(BaseEstimator):
                                    corrections=None if corrections is None else coef[n_law:])
 
     def nominal_for(self, candidate):
-        """The nominal with a candidate's modal corrections made (the
+        """The nominal with a candidate's linear corrections made (the
         nominal itself without them)."""
         if candidate.corrections is None or self.correction_ is None:
             return self.nominal
