@@ -84,18 +84,18 @@ class BandError:
         :mod:`~sklearn_pnlss.physics.prewarp`): the continuous structure's
         response, not Newmark's at a few steps per sample."""
         fs_fine, decimation = self.spectra.fs * self.oversampling, prime_factors(self.oversampling)
-        structure = prewarped(structure, fs_fine)
+        warped = prewarped(structure, fs_fine)
 
         def one(u_fine, start):
-            if start is not None and start.size != 3 * structure.n_dof + 2 * structure.n_internal_states:
+            if start is not None and start.size != 3 * warped.n_dof + 2 * warped.n_internal_states:
                 start = None
             with warnings.catch_warnings():
                 # a trial point that does not settle is judged by its misfit
                 warnings.simplefilter("ignore")
-                sim = structure.simulate_fine(u_fine, fs=fs_fine, inputs=self.inputs, periodic=True,
-                                              initial_state=start, warn=False, max_periods=FIT_MAX_PERIODS,
-                                              max_abs=self._max_abs)
-            y = decimate_columns(structure.measure(sim, self.sensors), decimation, periodic=True)
+                sim = warped.simulate_fine(u_fine, fs=fs_fine, inputs=self.inputs, periodic=True,
+                                           initial_state=start, warn=False, max_periods=FIT_MAX_PERIODS,
+                                           max_abs=self._max_abs)
+            y = decimate_columns(warped.measure(sim, self.sensors), decimation, periodic=True)
             return np.fft.rfft(y, axis=0)[self.lines] * self._out_factors, sim.final_state
 
         self.n_simulations += 1
