@@ -295,8 +295,8 @@ class StructuralGapDiagnosis(BaseEstimator):
             # first-order: made exactly, the nominal is read again around
             # them (Gauss-Newton), a step kept only where it leaves less
             # error (a strong law's action, read in part as corrections,
-            # made them overshoot and then diverge: 5 %, 20 %, 127 % on a
-            # mode's damping)
+            # made them overshoot and then diverge: their largest 0.05,
+            # 0.2, then 1.3 in log-factor)
             again = self._stepped(spectra, corrections)
             if again is None:
                 break
