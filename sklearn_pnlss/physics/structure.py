@@ -449,7 +449,8 @@ class Structure:
         while period < max_periods:
             start = state.copy()
             y, yd, ydd, z, failed = run(state, init, n)
-            _check_bound(y @ self.point_matrix.T, max_abs)
+            if max_abs is not None:  # the points' motion only where it is bounded
+                _check_bound(y @ self.point_matrix.T, max_abs)
             init, period, total_failed = False, period + 1, total_failed + failed
             traces = [y[:, j] for j in range(n_dof)] + [yd[:, j] for j in range(n_dof)] + [z[:, j] for j in range(nz)]
             scale = np.array([max(np.max(np.abs(t)), 1e-300) for t in traces])

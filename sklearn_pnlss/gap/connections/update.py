@@ -296,10 +296,8 @@ class ElementCorrection:
     def n_params(self):
         return self.elements.n_params
 
-    def columns(self, U):
-        """The changes of the outputs' spectra per parameter for input
-        spectra ``U`` (n_freqs, n_inputs): (n_freqs, n_outputs, n_params)."""
-        return np.einsum("foip,fi->fop", self.jacobian, U)
+    # the design columns from ``jacobian``, as the modes' are
+    columns = ModalCorrection.columns
 
     def applied(self, theta):
         """The structure with its elements' factors ``exp(theta)``."""
