@@ -342,7 +342,8 @@ class StructuralGapDiagnosis(BaseEstimator):
         (at most ``STEP_HALVINGS`` times); None where no step helps."""
         for k in range(STEP_HALVINGS + 1):
             nominal = self.locator_.correction_.applied(corrections / 2**k)
-            again = self._locator(nominal)._fit_spectra(spectra)
+            made = self.locator_._made(corrections.size) + corrections / 2**k
+            again = self._locator(nominal)._fit_spectra(spectra, made)
             if again.unexplained_ < self.locator_.unexplained_:
                 return again
         return None

@@ -52,12 +52,14 @@ __all__ = ["ConnectionLocator", "ConnectionCandidate", "band_and_weights"]
 #: masses explained most, at 20, 30 and 40 dB the right one 99.9 % with
 #: k3 within 1 %).
 MOTION_SNR = 100.0
-#: What a modal correction of one (a factor e on a mode's frequency,
-#: damping or shape scale) costs in the fit, as a share of the nominal's
-#: squared error: nothing next to a correction the records determine, the
-#: bound of one they do not (a mode that no sensor sees went to zero
-#: frequency without it).
-CORRECTION_PRICE = 1e-4
+#: What a linear correction of one (a factor e on a mass, a spring, a
+#: frequency, a damping ratio or a shape's scale), counted from the nominal
+#: given, costs in the fit, as a share of the records' output energy: a
+#: correction of 10 % costs a thousandth, nothing next to one the records
+#: determine; one that only absorbs a law's action is held back (a friction
+#: that nearly locks its joint had walked an exact chain's springs by
+#: factors up to 500 over four rounds, and no fit came back from there).
+CORRECTION_PRICE = 0.1
 #: Noise variance an output is credited with at least, relative to its
 #: power in the band (noise-free simulated records).
 NOISE_FLOOR = 1e-12
@@ -209,9 +211,13 @@ class ConnectionLocator(BaseEstimator):
         The nominal's rms error over the rms output in the band, per
         training record (outputs weighted by their noise).
     unexplained_ : float
-        The weighted error energy ``best_`` leaves, summed over the records
-        (comparable between nominals, where ``explained`` is a share of each
-        one's own error).
+        The weighted error energy ``best_`` leaves, summed over the records,
+        with its corrections' prior cost (``CORRECTION_PRICE``): comparable
+        between nominals, where ``explained`` is a share of each one's own
+        error.
+    made_corrections_ : ndarray or None
+        The linear corrections a diagnosis made to reach ``nominal`` from
+        the one it was given, which the prior counts (None: none).
 
     Examples
     --------
@@ -289,9 +295,11 @@ class ConnectionLocator(BaseEstimator):
         """
         return self._fit_spectra(self._spectra(X, y))
 
-    def _fit_spectra(self, spectra):
+    def _fit_spectra(self, spectra, made=None):
         """:meth:`fit` on the records' checked spectra (a diagnosis reads
-        them once for all its rounds)."""
+        them once for all its rounds); ``made``: the linear corrections
+        already made to reach this nominal, which the prior counts."""
+        self.made_corrections_ = made
         self.lines_, self.output_weights_ = band_and_weights(spectra, self.f_band)
         freqs = spectra.freqs[self.lines_]
         self.input_response_ = self.nominal.frequency_response(freqs, inputs=list(self.inputs),
@@ -300,6 +308,8 @@ class ConnectionLocator(BaseEstimator):
         self.correction_ = (linear_corrections(self.nominal, freqs, inputs=self.inputs, sensors=self.sensors)
                             if self.linear_corrections else None)
         error = self._weighted_error(spectra)
+        self._prior_weight = np.sqrt(CORRECTION_PRICE * np.sum(np.abs(spectra.Y[:, self.lines_]
+                                                                      * self.output_weights_) ** 2))
         self.nominal_error_ = np.sqrt(np.sum(np.abs(error) ** 2, axis=(1, 2)) / np.sum(
             np.abs(spectra.Y[:, self.lines_] * self.output_weights_) ** 2, axis=(1, 2)))
         self.places_ = self._places()
@@ -323,7 +333,12 @@ class ConnectionLocator(BaseEstimator):
         self.ranking_ = sorted(ranking, key=lambda c: -c.explained)
         self.candidates_.sort(key=lambda c: -c.explained)
         self.best_ = self.ranking_[0]
+        # what the best leaves, its corrections' prior cost with it: a round
+        # of corrections is judged by both
         self.unexplained_ = float((1.0 - self.best_.explained) * np.sum(np.abs(error) ** 2))
+        if self.best_.corrections is not None:
+            self.unexplained_ += float(np.sum((self._prior_weight * (self._made(self.best_.corrections.size)
+                                                                     + self.best_.corrections)) ** 2))
         return self
 
     def _spectra(self, X, y):
@@ -410,17 +425,22 @@ class ConnectionLocator(BaseEstimator):
         b = error.reshape(-1)
         A2, b2 = np.concatenate([A.real, A.imag]), np.concatenate([b.real, b.imag])
         n_law = len(law.param_names)
-        # a mode the records hardly see would take any correction: each
-        # costs CORRECTION_PRICE of the error's energy per unit (a factor e)
+        # the prior: each correction, with those already made, costs
+        # CORRECTION_PRICE of the output's energy per unit
         prior = np.zeros((A2.shape[1] - n_law, A2.shape[1]))
-        prior[:, n_law:] = np.sqrt(CORRECTION_PRICE * np.sum(b2**2)) * np.eye(prior.shape[0])
-        A_fit, b_fit = np.vstack([A2, prior]), np.concatenate([b2, np.zeros(prior.shape[0])])
+        prior[:, n_law:] = self._prior_weight * np.eye(prior.shape[0])
+        A_fit, b_fit = np.vstack([A2, prior]), np.concatenate([b2, -self._prior_weight * self._made(prior.shape[0])])
         scale = np.linalg.norm(A_fit, axis=0)
         scale[scale == 0] = 1.0
         coef = np.linalg.lstsq(A_fit / scale, b_fit, rcond=None)[0] / scale
         explained = 1.0 - np.sum((b2 - A2 @ coef) ** 2) / np.sum(b2**2)
         return ConnectionCandidate(place, law, coef[:n_law], law.parameters(coef[:n_law]), float(explained),
                                    corrections=None if corrections is None else coef[n_law:])
+
+    def _made(self, n):
+        """The corrections already made to reach the nominal (none: the
+        nominal as given)."""
+        return np.zeros(n) if self.made_corrections_ is None else self.made_corrections_
 
     def nominal_for(self, candidate):
         """The nominal with a candidate's linear corrections made (the
