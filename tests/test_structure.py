@@ -143,6 +143,22 @@ def test_a_periodic_nonlinear_steady_state_is_where_a_long_run_ends():
     np.testing.assert_allclose(steady.y, long.y[-n:], rtol=0, atol=1e-7 * np.abs(steady.y).max())
 
 
+
+def test_a_steep_friction_converges_at_every_step():
+    """A friction smoothed over a velocity a hundredth of the motion's: a
+    full Newton step overshoots the root far into the flat part of the law
+    and back (4 500 of 10 000 steps failed, the steady state off by 0.3 %);
+    halved where it leaves a larger residual, every step converges and the
+    periodic steady state is where a long run ends."""
+    chain = _chain([Connection(CoulombFriction(20.0, 1e-4), "tip", "base")])
+    n, fs = 1000, 10000.0
+    t = np.arange(n) / fs
+    u = 30 * np.sin(2 * np.pi * 10 * t) + 20 * np.sin(2 * np.pi * 30 * t)
+    steady = chain.simulate_fine(u, fs=fs, inputs="base", periodic=True, max_periods=80, warn=False)
+    long = chain.simulate_fine(np.tile(u, 60), fs=fs, inputs="base")
+    assert steady.n_newton_failures == 0 and long.n_newton_failures == 0
+    np.testing.assert_allclose(steady.y, long.y[-n:], rtol=0, atol=1e-4 * np.abs(steady.y).max())
+
 @pytest.mark.parametrize("make, match", [
     (lambda: Structure(np.eye(2), np.eye(3), np.eye(2)), "damping must be 2 x 2"),
     (lambda: Structure(-np.eye(2), np.eye(2), np.eye(2)), "positive definite"),
