@@ -28,8 +28,8 @@ from numba import njit
 from ._newmark import _dparams, _factor_inplace, _force, _rate, _solve_factored
 
 _JIT = dict(cache=True, nogil=True)
-#: A Newton step is halved at most this many times where it leaves a larger
-#: residual.
+#: A Newton step is taken back halfway at most this many times in a row
+#: where it leaves a larger residual.
 NEWTON_HALVINGS = 8
 
 
@@ -101,33 +101,6 @@ def _newton_matrix(jac, g_mat, z_off, owner, dfdr, dfdrd, dfdz, dgdy, dgdyd, dgd
         for col in range(z_off[e], z_off[e + 1]):
             jac[n_c + j, n_c + col] = -half_h * dgdz[j, col]
         jac[n_c + j, n_c + j] += 1.0
-
-
-@njit(**_JIT)
-def _step_residual(kinds, p_off, params, z_off, r, rd, zq, r_lin, r_prev, rd_prev, z, zd, g_mat, forces, dfdr,
-                   dfdrd, dfdz, g, dgdy, dgdyd, dgdz, res, c_vel, half_h):
-    """The step's residual at ``(r, zq)`` into ``res`` (negated: Newton's
-    right-hand side), and the partial derivatives there."""
-    n_c = r.shape[0]
-    for c in range(n_c):
-        rd[c] = c_vel * (r[c] - r_prev[c]) - rd_prev[c]
-    _connection_forces(kinds, p_off, params, z_off, r, rd, zq, forces, dfdr, dfdrd, dfdz)
-    _state_rates(kinds, p_off, params, z_off, r, rd, zq, g, dgdy, dgdyd, dgdz)
-    for c in range(n_c):
-        s = r[c] - r_lin[c]
-        for k in range(n_c):
-            s += g_mat[c, k] * forces[k]
-        res[c] = -s
-    for j in range(zq.shape[0]):
-        res[n_c + j] = -(zq[j] - z[j] - half_h * (zd[j] + g[j]))
-
-
-@njit(**_JIT)
-def _scaled_norm(res, scale):
-    total = 0.0
-    for a in range(res.shape[0]):
-        total += (res[a] / scale[a]) ** 2
-    return total
 
 
 @njit(**_JIT)
@@ -214,8 +187,6 @@ def structure_run(u, n_steps, h, a_u, a_y, a_yd, a_ydd, w, g_mat, d_mat, p_mat, 
     pivots = np.zeros(n_x, dtype=np.int64)
     x = np.zeros(n_x)
     x0 = np.zeros(n_x)
-    step = np.zeros(n_x)
-    res0 = np.zeros(n_x)
     scale_x = np.zeros(n_x)
     dy_lin = np.zeros(n)
     d_rd_const = np.zeros(n_c)
@@ -304,44 +275,60 @@ def structure_run(u, n_steps, h, a_u, a_y, a_yd, a_ydd, w, g_mat, d_mat, p_mat, 
         for j in range(nz):
             zq[j] = z[j] + half_h * zd[j]
 
-        # damped Newton: a full step that leaves a larger residual is
-        # halved (a steep law, a friction smoothed over a small velocity,
+        # damped Newton: a step that leaves a larger residual is taken back
+        # halfway (a steep law, a friction smoothed over a small velocity,
         # sends the full step far past the root and back, step after step,
         # and a failed step's force is noise in a fit's differences)
-        _step_residual(kinds, p_off, params, z_off, r, rd, zq, r_lin, r_prev, rd_prev, z, zd, g_mat, forces, dfdr,
-                       dfdrd, dfdz, g, dgdy, dgdyd, dgdz, res, c_vel, half_h)
+        for a in range(n_x):
+            scale_x[a] = max(peak[a], abs(r[a]) if a < n_c else abs(zq[a - n_c]), 1e-30)
         converged = False
+        best, halvings = np.inf, 0
         for it in range(max_iter):
-            _newton_matrix(jac, g_mat, z_off, owner, dfdr, dfdrd, dfdz, dgdy, dgdyd, dgdz, c_vel, half_h)
-            _factor_inplace(jac, pivots, n_x)
-            for a in range(n_x):
-                step[a] = res[a]
-                res0[a] = res[a]
-                x0[a] = r[a] if a < n_c else zq[a - n_c]
-            _solve_factored(jac, pivots, step, n_x)
-            small = True
-            for a in range(n_x):
-                # each unknown's residual on the scale of its motion
-                scale_x[a] = max(peak[a], abs(x0[a]), abs(x0[a] + step[a]), 1e-300)
-                if abs(step[a]) > rtol * max(abs(x0[a] + step[a]), peak[a]):
-                    small = False
-            norm = _scaled_norm(res0, scale_x)
-            lam = 1.0
-            for k in range(NEWTON_HALVINGS + 1):
+            for c in range(n_c):
+                rd[c] = c_vel * (r[c] - r_prev[c]) - rd_prev[c]
+            _connection_forces(kinds, p_off, params, z_off, r, rd, zq, forces, dfdr, dfdrd, dfdz)
+            _state_rates(kinds, p_off, params, z_off, r, rd, zq, g, dgdy, dgdyd, dgdz)
+            norm = 0.0
+            for c in range(n_c):
+                s = r[c] - r_lin[c]
+                for k in range(n_c):
+                    s += g_mat[c, k] * forces[k]
+                res[c] = -s
+                norm += (s / scale_x[c]) ** 2
+            for j in range(nz):
+                s = zq[j] - z[j] - half_h * (zd[j] + g[j])
+                res[n_c + j] = -s
+                norm += (s / scale_x[n_c + j]) ** 2
+            if not norm < best and halvings < NEWTON_HALVINGS and np.isfinite(best):
+                halvings += 1
                 for a in range(n_x):
                     if a < n_c:
-                        r[a] = x0[a] + lam * step[a]
+                        r[a] = 0.5 * (x0[a] + r[a])
                     else:
-                        zq[a - n_c] = x0[a] + lam * step[a]
-                _step_residual(kinds, p_off, params, z_off, r, rd, zq, r_lin, r_prev, rd_prev, z, zd, g_mat, forces,
-                               dfdr, dfdrd, dfdz, g, dgdy, dgdyd, dgdz, res, c_vel, half_h)
-                trial = _scaled_norm(res, scale_x)
-                if small or trial < norm or k == NEWTON_HALVINGS:
-                    break
-                lam *= 0.5
-            if not np.isfinite(trial):
+                        zq[a - n_c] = 0.5 * (x0[a] + zq[a - n_c])
+                continue
+            best, halvings = norm, 0
+            _newton_matrix(jac, g_mat, z_off, owner, dfdr, dfdrd, dfdz, dgdy, dgdyd, dgdz, c_vel, half_h)
+            _factor_inplace(jac, pivots, n_x)
+            _solve_factored(jac, pivots, res, n_x)
+            ok = True
+            finite = True
+            for a in range(n_x):
+                if a < n_c:
+                    x0[a] = r[a]
+                    r[a] += res[a]
+                    value = r[a]
+                else:
+                    x0[a] = zq[a - n_c]
+                    zq[a - n_c] += res[a]
+                    value = zq[a - n_c]
+                if not np.isfinite(value):
+                    finite = False
+                if abs(res[a]) > rtol * max(abs(value), peak[a]):
+                    ok = False
+            if not finite:
                 break
-            if small:
+            if ok:
                 converged = True
                 break
         if not converged:
