@@ -308,10 +308,9 @@ class ConnectionLocator(BaseEstimator):
         self.correction_ = (linear_corrections(self.nominal, freqs, inputs=self.inputs, sensors=self.sensors)
                             if self.linear_corrections else None)
         error = self._weighted_error(spectra)
-        self._prior_weight = np.sqrt(CORRECTION_PRICE * np.sum(np.abs(spectra.Y[:, self.lines_]
-                                                                      * self.output_weights_) ** 2))
-        self.nominal_error_ = np.sqrt(np.sum(np.abs(error) ** 2, axis=(1, 2)) / np.sum(
-            np.abs(spectra.Y[:, self.lines_] * self.output_weights_) ** 2, axis=(1, 2)))
+        output_energy = np.sum(np.abs(spectra.Y[:, self.lines_] * self.output_weights_) ** 2, axis=(1, 2))
+        self._prior_weight = np.sqrt(CORRECTION_PRICE * np.sum(output_energy))
+        self.nominal_error_ = np.sqrt(np.sum(np.abs(error) ** 2, axis=(1, 2)) / output_energy)
         self.places_ = self._places()
         self.rms_ = {}
         ranking, self.linear_, self.candidates_ = [], {}, []
