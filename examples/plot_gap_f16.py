@@ -24,9 +24,10 @@ gap closes once that connection is simulated.
    that explain most and fits them by simulation error.
 3. The report reads the chosen connection on the test levels 2, 4 and 6.
 
-The whole run takes about three minutes on two cores. The data are not
-shipped with the library: set ``SKLEARN_PNLSS_F16_DATA`` to the folder of
-the benchmark's ``F16Data_*.mat`` files (see
+The whole run takes about ten minutes on two cores (the benchmark
+``benchmarks/bench_f16_gap.py`` repeats it and records the time). The
+data are not shipped with the library: set ``SKLEARN_PNLSS_F16_DATA`` to
+the folder of the benchmark's ``F16Data_*.mat`` files (see
 :func:`~sklearn_pnlss.datasets.load_f16`). Without them the example says
 so and stops.
 """
