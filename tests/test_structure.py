@@ -143,7 +143,6 @@ def test_a_periodic_nonlinear_steady_state_is_where_a_long_run_ends():
     np.testing.assert_allclose(steady.y, long.y[-n:], rtol=0, atol=1e-7 * np.abs(steady.y).max())
 
 
-
 def test_a_steep_friction_converges_at_every_step():
     """A friction smoothed over a velocity a hundredth of the motion's: a
     full Newton step overshoots the root far into the flat part of the law
@@ -158,6 +157,7 @@ def test_a_steep_friction_converges_at_every_step():
     long = chain.simulate_fine(np.tile(u, 60), fs=fs, inputs="base")
     assert steady.n_newton_failures == 0 and long.n_newton_failures == 0
     np.testing.assert_allclose(steady.y, long.y[-n:], rtol=0, atol=1e-4 * np.abs(steady.y).max())
+
 
 @pytest.mark.parametrize("make, match", [
     (lambda: Structure(np.eye(2), np.eye(3), np.eye(2)), "damping must be 2 x 2"),
