@@ -44,6 +44,12 @@ _JIT = dict(cache=True, nogil=True)
 # called as functions, every call passed its arrays with a reference count
 # each (an element with internal states ran 22 % slower; results identical).
 _INLINE = dict(_JIT, inline="always")
+# The time loops are compiled without reference counting (numba's
+# ``_nrt=False``): they take every array they use from their caller, which
+# makes them (nothing in a loop may allocate).  The counts numba kept on the
+# arrays passed to the inlined helpers took about a third of a step
+# (measured with perf in NRT_incref and NRT_decref).
+_LOOP = dict(_JIT, _nrt=False)
 
 # Layout of the carried state vector: [y, yd, ydd, z_0..z_{nz-1}, zd_0..zd_{nz-1}].
 STATE_Y, STATE_YD, STATE_YDD, STATE_Z = 0, 1, 2, 3
@@ -333,7 +339,8 @@ def integrator_kernels(functions=()):
         # numba reads a kernel's globals when it compiles, so every copy,
         # made in the shared namespace, calls the other copies.
         for name in ("_force", "_total_force_and_rates", "_element_derivatives", "_initial_tangents",
-                     "_tangent_step", "_stateless_run", "_one_state_run", "_two_state_run", "newmark_run",
+                     "_tangent_step", "_stateless_run", "_one_state_run", "_two_state_run", "_general_run",
+                     "newmark_run",
                      "stateless_forces"):
             py = globals()[name].py_func
             namespace[name] = njit(nogil=True)(types.FunctionType(py.__code__, namespace, py.__name__))
@@ -590,8 +597,9 @@ def _end_rates(q, y, yd, ydd, h, c_vel, c_acc):
 # --------------------------------------------------------------------------
 # Integrator
 # --------------------------------------------------------------------------
-@njit(**_JIT)
-def _stateless_run(u, n_steps, h, m, c, k, kinds, p_off, params, y, yd, ydd, peak, y_out, yd_out, rtol, max_iter):
+@njit(**_LOOP)
+def _stateless_run(u, n_steps, h, m, c, k, kinds, p_off, params, y, yd, ydd, peak, y_out, yd_out, rtol, max_iter,
+                   no_z, dfdz):
     """``newmark_run`` without internal states or sensitivities: the same
     operations in the same order on scalars (bit-identical results), as the
     array bookkeeping of the general loop cost more than the arithmetic
@@ -600,8 +608,6 @@ def _stateless_run(u, n_steps, h, m, c, k, kinds, p_off, params, y, yd, ydd, pea
     n_u = u.shape[0]
     n_out = y_out.shape[0]
     c_acc, c_vel, jac_lin = _newmark_constants(h, m, c, k)
-    no_z = np.zeros(0)
-    dfdz = np.zeros(0)
     n_failed = 0
     n_iter = 0
     for i in range(n_steps + 1):
@@ -638,9 +644,9 @@ def _stateless_run(u, n_steps, h, m, c, k, kinds, p_off, params, y, yd, ydd, pea
     return y, yd, ydd, n_failed, n_iter
 
 
-@njit(**_JIT)
+@njit(**_LOOP)
 def _one_state_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, y, yd, ydd, z, zd, y_out, yd_out, z_out,
-                   rtol, max_iter):
+                   rtol, max_iter, zq, dfdz, g, dgdy, dgdyd, dgdz):
     """``newmark_run`` with one internal state and no sensitivities (a
     hysteresis, a stiffness drift's clock, a series damper, with any
     stateless elements): the 2 x 2 Newton step of the general loop on
@@ -651,12 +657,6 @@ def _one_state_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, y, yd, y
     n_u = u.shape[0]
     n_out = y_out.shape[0]
     c_acc, c_vel, jac_lin = _newmark_constants(h, m, c, k)
-    zq = np.zeros(1)
-    dfdz = np.zeros(1)
-    g = np.zeros(1)
-    dgdy = np.zeros(1)
-    dgdyd = np.zeros(1)
-    dgdz = np.zeros((1, 1))
     peak_y = abs(y)
     peak_z = abs(z[0])
     n_failed = 0
@@ -727,9 +727,9 @@ def _one_state_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, y, yd, y
     return y, yd, ydd, n_failed, n_iter
 
 
-@njit(**_JIT)
+@njit(**_LOOP)
 def _two_state_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, y, yd, ydd, z, zd, y_out, yd_out, z_out,
-                   rtol, max_iter):
+                   rtol, max_iter, zq, dfdz, g, dgdy, dgdyd, dgdz):
     """``newmark_run`` with two internal states and no sensitivities (a
     second mode, or two elements of one state each, with any stateless
     elements): the 3 x 3 Newton step of the general loop on scalars, the
@@ -740,12 +740,6 @@ def _two_state_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, y, yd, y
     n_out = y_out.shape[0]
     c_acc, c_vel, jac_lin = _newmark_constants(h, m, c, k)
     half_h = 0.5 * h
-    zq = np.zeros(2)
-    dfdz = np.zeros(2)
-    g = np.zeros(2)
-    dgdy = np.zeros(2)
-    dgdyd = np.zeros(2)
-    dgdz = np.zeros((2, 2))
     # the Newton matrix couples the two states only inside one element
     one_element = False
     for e in range(kinds.shape[0]):
@@ -885,14 +879,15 @@ def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
 
     if nz == 0 and n_dir == 0:
         y, yd, ydd, n_failed, n_iter = _stateless_run(u, n_steps, h, m, c, k, kinds, p_off, params, y, yd, ydd,
-                                                      abs(y), y_out, yd_out, rtol, max_iter)
+                                                      abs(y), y_out, yd_out, rtol, max_iter, zq, dfdz)
         state[STATE_Y] = y
         state[STATE_YD] = yd
         state[STATE_YDD] = ydd
         return n_failed, n_iter
     if nz == 1 and n_dir == 0:
         y, yd, ydd, n_failed, n_iter = _one_state_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, y, yd,
-                                                      ydd, z, zd, y_out, yd_out, z_out, rtol, max_iter)
+                                                      ydd, z, zd, y_out, yd_out, z_out, rtol, max_iter, zq,
+                                                      dfdz, g, dgdy, dgdyd, dgdz)
         state[STATE_Y] = y
         state[STATE_YD] = yd
         state[STATE_YDD] = ydd
@@ -901,7 +896,8 @@ def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
         return n_failed, n_iter
     if nz == 2 and n_dir == 0:
         y, yd, ydd, n_failed, n_iter = _two_state_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, y, yd,
-                                                      ydd, z, zd, y_out, yd_out, z_out, rtol, max_iter)
+                                                      ydd, z, zd, y_out, yd_out, z_out, rtol, max_iter, zq,
+                                                      dfdz, g, dgdy, dgdyd, dgdz)
         state[STATE_Y] = y
         state[STATE_YD] = yd
         state[STATE_YDD] = ydd
@@ -910,6 +906,23 @@ def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
             state[STATE_Z + 2 + j] = zd[j]
         return n_failed, n_iter
 
+    return _general_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state, y, yd, ydd, z, zd, y_out,
+                        yd_out, z_out, rtol, max_iter, tangents, param_of, dy_out, q, res, jac, peak, dfdz, g, dgdy,
+                        dgdyd, dgdz, zq, dfdp, dgdp, a_mat, pivots, x)
+
+
+@njit(**_LOOP)
+def _general_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state, y, yd, ydd, z, zd, y_out, yd_out, z_out,
+                 rtol, max_iter, tangents, param_of, dy_out, q, res, jac, peak, dfdz, g, dgdy, dgdyd, dgdz, zq, dfdp,
+                 dgdp, a_mat, pivots, x):
+    """The loop of :func:`newmark_run` for any number of states, with
+    sensitivities, on the work arrays it made."""
+    nz = z_off[z_off.shape[0] - 1]
+    n = 1 + nz
+    n_u = u.shape[0]
+    n_out = y_out.shape[0]
+    n_dir = tangents.shape[0]
+    n_dy = dy_out.shape[0]
     peak[0] = abs(y)
     for j in range(nz):
         peak[1 + j] = abs(z[j])
