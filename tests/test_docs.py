@@ -938,7 +938,7 @@ FIGURES = [
     Figure(GAP, "(a) the nominal read off the BLA of the same data (:func:`~sklearn_pnlss.gap.linear_nominal`), "
                 "two seeds at both strengths of every effect, and three effects removed from the candidates (52 "
                 "cases): the right effect in 44 of 44 effect cases, no false alarm, ``\"unexplained\"`` in 6 of 6 "
-                "removed cases, 20 s per diagnosis (median), 68 s at most (a removed hysteresis; 82 s and 178 s "
+                "removed cases, 14 s per diagnosis (median), 36 s at most (a removed hysteresis; 82 s and 178 s "
                 "before this code's speed-ups); the stiff backlash closes 100.0 % with the nominal's "
                 "mass, damping and stiffness recalibrated by +4 %, -44 % and -13 %",
            "gap_withheld.py --family a",
@@ -1009,7 +1009,7 @@ FIGURES = [
                     0.5e3 / 750, 1e3 / 750, 1.5e3 / 750], slack=0.01),
     Figure(GAP, "Left out, the second seed's stiff backlash closed 99.998 % of the achievable in families a, b "
                 "and e; on the present code it closes 96.9 % in family a, 95.5 % in family b and 97.4 % in family e "
-                "(24 s, 21 s and 16 s; 346 s in family b before)",
+                "(18 s, 21 s and 16 s; 346 s in family b before)",
            "gap_withheld.py --family a, b, e (backlash, seed 101; before: the rows on 38bbb02 and the earlier runs)",
            lambda: [99.998, *[100 * _case(f, "backlash", 101)["closure_vs_achievable"] for f in "abe"],
                     *[_case(f, "backlash", 101)["seconds"] for f in "abe"], 346],
