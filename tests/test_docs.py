@@ -953,8 +953,8 @@ FIGURES = [
                 "(``--strengths 2``, 52 cases): the right effect in 44 of 44 effect cases, the stiff backlash "
                 "included (closing 100.0 % under a nominal 13-20 % off), a channel delay under the nominal's errors "
                 "named ``recalibration`` with the delay, ``recalibration`` without an effect, ``\"unexplained\"`` in "
-                "6 of 6 removed cases, 19 s per diagnosis (median; 93 s before this code's speed-ups), 89 s at most "
-                "(a removed backlash; the others 35 s at most)",
+                "6 of 6 removed cases, 16 s per diagnosis (median; 93 s before this code's speed-ups), 52 s at most "
+                "(a removed backlash; the others 27 s at most)",
            "gap_withheld.py --family b (before: the run on 249ef31)",
            lambda: [10 * _source_of("benchmarks/gap_withheld.py", "rng.uniform(0.1, 0.3, 3)"), 30, 2,
                     len(_results("gap_withheld_family_b")["rows"]), *_family("b")[:2],
@@ -1009,7 +1009,7 @@ FIGURES = [
                     0.5e3 / 750, 1e3 / 750, 1.5e3 / 750], slack=0.01),
     Figure(GAP, "Left out, the second seed's stiff backlash closed 99.998 % of the achievable in families a, b "
                 "and e; on the present code it closes 96.9 % in family a, 95.5 % in family b and 97.4 % in family e "
-                "(18 s, 21 s and 16 s; 346 s in family b before)",
+                "(18 s, 15 s and 16 s; 346 s in family b before)",
            "gap_withheld.py --family a, b, e (backlash, seed 101; before: the rows on 38bbb02 and the earlier runs)",
            lambda: [99.998, *[100 * _case(f, "backlash", 101)["closure_vs_achievable"] for f in "abe"],
                     *[_case(f, "backlash", 101)["seconds"] for f in "abe"], 346],
