@@ -534,7 +534,7 @@ def _f16_pair(key):
 
 
 FIELD_FIGURES = [
-    Figure(R, "A diagnosis takes 13 to 23 s at the median on 2 cores", "gap_withheld.py --family e, a, b, c, d",
+    Figure(R, "A diagnosis takes 13 to 22 s at the median on 2 cores", "gap_withheld.py --family e, a, b, c, d",
            lambda: [min(_family(f)[3] for f in "eabcd"), max(_family(f)[3] for f in "eabcd"), 2], slack=0.5),
     Figure(R, "| WH2009 | `BLAEstimator(6)` | 57.42 mV | 2.1 s | |", FIELD,
            lambda: [_field("wh2009", "BLA")["settings"]["n_states"], _field("wh2009", "BLA")["test_rmse"],
@@ -966,8 +966,8 @@ FIGURES = [
                     sorted(r["seconds"] for r in _results("gap_withheld_family_b")["rows"])[-2]], slack=1.0),
     Figure(GAP, "cycled over the effects), two seeds at both strengths of every effect, and three effects removed "
                 "from the candidates (52 cases): the right effect in 44 of 44 effect cases, no false alarm, "
-                "``\"unexplained\"`` in 6 of 6 removed cases, 23 s per diagnosis (median; 67 s before this code's "
-                "speed-ups; records that are not periodic leave no black box to fit), 43 s at most.",
+                "``\"unexplained\"`` in 6 of 6 removed cases, 19 s per diagnosis (median; 67 s before this code's "
+                "speed-ups; records that are not periodic leave no black box to fit), 29 s at most.",
            "gap_withheld.py --family c (before: the run on 8146224)",
            lambda: [len(_results("gap_withheld_family_c")["rows"]), *_family("c")[:2], *_family("c")[4:],
                     _family("c")[3] if _family("c")[2] else -1, 67,
