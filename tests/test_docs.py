@@ -534,7 +534,7 @@ def _f16_pair(key):
 
 
 FIELD_FIGURES = [
-    Figure(R, "A diagnosis takes 13 to 22 s at the median on 2 cores", "gap_withheld.py --family e, a, b, c, d",
+    Figure(R, "A diagnosis takes 13 to 19 s at the median on 2 cores", "gap_withheld.py --family e, a, b, c, d",
            lambda: [min(_family(f)[3] for f in "eabcd"), max(_family(f)[3] for f in "eabcd"), 2], slack=0.5),
     Figure(R, "| WH2009 | `BLAEstimator(6)` | 57.42 mV | 2.1 s | |", FIELD,
            lambda: [_field("wh2009", "BLA")["settings"]["n_states"], _field("wh2009", "BLA")["test_rmse"],
@@ -988,7 +988,7 @@ FIGURES = [
                 "effects removed from the candidates (``--strengths 2``, 52 cases): the right effect in 44 of 44 "
                 "effect cases, the delay without an effect named ``input_delay``, a nominal stiffness 5 % off (alone, "
                 "or with the damping 30 % off) named ``recalibration`` with the channel delay, ``\"unexplained\"`` in "
-                "6 of 6 removed cases, 22 s per diagnosis (median; 98 s before this code's speed-ups), 71 s at most (a "
+                "6 of 6 removed cases, 18 s per diagnosis (median; 98 s before this code's speed-ups), 58 s at most (a "
                 "stiff backlash, the delay found behind it; 399 s before",
            "gap_withheld.py --family d (before: the run on def964f)",
            lambda: [4 * _source_of("benchmarks/gap_withheld.py", "butter(4, 300.0"), 300, 2,
