@@ -45,10 +45,10 @@ _JIT = dict(cache=True, nogil=True)
 # each (an element with internal states ran 22 % slower; results identical).
 _INLINE = dict(_JIT, inline="always")
 # The time loops are compiled without reference counting (numba's
-# ``_nrt=False``): they take every array they use from their caller, which
-# makes them (nothing in a loop may allocate).  The counts numba kept on the
-# arrays passed to the inlined helpers took about a third of a step
-# (measured with perf in NRT_incref and NRT_decref).
+# ``_nrt=False``): their caller makes every array they use (nothing in a
+# loop may allocate).  The counts numba kept on the arrays passed to the
+# inlined helpers took about a third of a step (measured with perf in
+# NRT_incref and NRT_decref).
 _LOOP = dict(_JIT, _nrt=False)
 
 # Layout of the carried state vector: [y, yd, ydd, z_0..z_{nz-1}, zd_0..zd_{nz-1}].
