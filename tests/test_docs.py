@@ -1057,7 +1057,7 @@ FIGURES = [
                sum(summary["second_named_where_it_pays"]), len(summary["second_named_where_it_pays"])])(
                *_family_t())),
     Figure(GAP, "the pair closes 93.7 % for the cubic spring with friction at half its error, the others 98 % or "
-                "more; 46 s per diagnosis (median), 79 s at most (96 s and 163 s before this code's speed-ups, 57 s "
+                "more; 38 s per diagnosis (median), 63 s at most (96 s and 163 s before this code's speed-ups, 57 s "
                 "and 82 s before the pairs were raced; the forward selection fits each of the three best candidates "
                 "with every other effect, 4 iterations each, and carries on the 3 best",
            "gap_withheld.py --family t: results/gap_withheld_family_t.json (before: the file at 868630d and at "
