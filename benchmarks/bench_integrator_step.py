@@ -91,13 +91,13 @@ def structure_rows():
     relative = [m[:, 0] - (m[:, 1] if m.shape[1] > 1 else 0.0) for m in motion]
     k_joint = chain.stiffness[chain.points.index(joint[0]), chain.points.index(joint[0])] / 2
     scales = (k_joint, relative[0].std(), relative[1].std())
+    n = chain.n_dof
+    flops = 2 * n * (3 * n + 1) + 8 * n
     rows = {}
     for law in ("linear",) + tuple(e for e in gs.EFFECTS if e is not None):
         structure = chain if law == "linear" else chain.with_connections(
             [Connection(gs.element(law, scales, rng), *joint)])
         seconds = structure_step_cost(prewarped(structure, fs), u_fine, fs, drive)
-        n = chain.n_dof
-        flops = 2 * n * (3 * n + 1) + 8 * n
         rows[law] = dict(n_dof=n, ns_per_step=round(1e9 * seconds, 1), linear_step_flops=flops)
         print(f"structure, {law:<17} {1e9 * seconds:7.1f} ns per step ({n} points; the linear step's arithmetic "
               f"{flops} flops)", flush=True)

@@ -153,8 +153,8 @@ def structure_run(u, n_steps, h, a_u, a_y, a_yd, a_ydd, w, g_mat, d_mat, p_mat, 
                 np.zeros((nz, params.shape[0])), np.zeros(n_x, dtype=np.int64))
 
 
-# Compiled without reference counting (``_nrt=False``): every array the
-# loop reads is a view of one made by ``structure_run``, and the counts
+# Compiled without reference counting (``_nrt=False``): every work array
+# of the loop is a view of one made by ``structure_run``, and the counts
 # kept on them (the views, the arguments of the inlined helpers) took 63 %
 # of a step of a 5-point chain with a cubic spring (measured with perf: the
 # time in NRT_incref and NRT_decref).  Nothing here may allocate.
