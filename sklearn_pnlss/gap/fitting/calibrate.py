@@ -8,6 +8,7 @@ is not physical gets a large residual, so the trust region shrinks away from
 it; it is never returned.
 """
 import time
+from collections import namedtuple
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -62,6 +63,10 @@ class EffectFit:
         (:func:`parameter_information`), filled once the diagnosis' fits
         are final: the report's parameter covariance
         (:func:`parameter_covariance`) needs no training data.
+    progress_db : float
+        Training gain per evaluation (dB) over the last half of the last
+        solve's evaluations: what another budget can be expected to bring
+        (0 when it converged, or nothing was solved).
     """
 
     effect: object
@@ -76,6 +81,23 @@ class EffectFit:
     refined: bool = True
     coarse_mse: float = None
     information: np.ndarray = None
+    progress_db: float = 0.0
+
+
+#: How a solve stopped: converged, the solver's message, and the training
+#: gain per evaluation (dB) over its last half (see ``EffectFit.progress_db``).
+Stop = namedtuple("Stop", "converged message progress_db")
+NOTHING_SOLVED = Stop(True, "nothing to fit", 0.0)
+
+
+def _progress_db(costs, converged):
+    """Gain per evaluation (dB) of the best cost so far over the last half
+    of ``costs`` (a solve's evaluations in order); 0 once converged."""
+    if converged or len(costs) < 2:
+        return 0.0
+    best = np.minimum.accumulate(costs)
+    half = len(best) // 2
+    return float(10 * np.log10(best[half - 1] / best[-1]) / (len(best) - half)) if best[-1] > 0 else 0.0
 
 
 class _Objective:
@@ -187,13 +209,15 @@ def _physical_derivatives(effect, theta, osc, nominal, scales, upper):
 
 
 def _solve(obj, theta0, lower, upper, max_nfev, ftol):
-    cache = {}
+    """``obj`` minimised from ``theta0``: ``(theta, Stop, cost)``."""
+    cache, costs = {}, []
 
     def fun(theta):
         key = theta.tobytes()
         if key not in cache:
             cache.clear()  # the Jacobian asks for the last point only
             cache[key] = obj(theta)
+            costs.append(float(np.sum(cache[key] ** 2)))
         return cache[key]
 
     def jac(theta):
@@ -204,7 +228,8 @@ def _solve(obj, theta0, lower, upper, max_nfev, ftol):
     theta0 = np.clip(theta0, lower + 1e-9 * span, upper - 1e-9 * span)
     res = least_squares(fun, theta0, jac=jac, bounds=(lower, upper), method="trf",
                         x_scale="jac", max_nfev=max_nfev, xtol=1e-6, ftol=ftol)
-    return res.x, res.status > 0, res.message, float(np.sum(fun(res.x) ** 2))
+    converged = res.status > 0
+    return res.x, Stop(converged, res.message, _progress_db(costs, converged)), float(np.sum(fun(res.x) ** 2))
 
 
 def _by_signal(a, y_meas):
@@ -251,8 +276,8 @@ def stalled_near_noise(converged, mse, noise_variance):
 def _refit_without_outliers(obj, theta, r, stalled, lower, upper, max_nfev, ftol):
     """``theta`` (residuals ``r``) refitted on the training signals that
     neither jumped nor make the misfit a needle, kept when it lowers the
-    cost on all of them: ``(theta, its residuals, (converged, message) of
-    the refit or None, simulations used)``.
+    cost on all of them: ``(theta, its residuals, the refit's Stop or None,
+    simulations used)``.
 
     A response that jumps between coexisting steady states (a stiff spring
     engaging beyond a clearance) makes the simulation error a needle: 0.1 %
@@ -281,11 +306,11 @@ def _refit_without_outliers(obj, theta, r, stalled, lower, upper, max_nfev, ftol
     if not left_out:
         return theta, r, None, n_used
     sub = obj.subset([i for i in range(len(obj.y_meas)) if i not in left_out])
-    refit, converged, message, _ = _solve(sub, theta, lower, upper, max_nfev, ftol)
+    refit, stop, _ = _solve(sub, theta, lower, upper, max_nfev, ftol)
     r_refit = obj(refit)
     n_used += sub.n_evaluations + 1  # and the refit's cost on all signals
     if np.sum(r_refit**2) < np.sum(r**2):
-        return refit, r_refit, (converged, message), n_used
+        return refit, r_refit, stop, n_used
     return theta, r, None, n_used
 
 
@@ -339,7 +364,7 @@ def meaningful_ftol(noise, n_samples):
 
 def _defect_corrected(obj, fine_signals, theta, lower, upper, max_nfev, ftol):
     """Refine a fit of the coarse-rate objective ``obj`` by defect
-    correction: ``(objective, theta, simulations, (converged, message) or
+    correction: ``(objective, theta, simulations, the last round's Stop or
     None)``.
 
     Each round carries the model's own discretisation error at the latest
@@ -362,11 +387,11 @@ def _defect_corrected(obj, fine_signals, theta, lower, upper, max_nfev, ftol):
                 [f - c for f, c in zip(fine, simulate_signals(osc, plain, transform))])
             round_obj = _Objective(obj.effect, obj.nominal, obj.scales, corrected, obj.y_meas, obj.offsets)
             start_cost = float(np.sum(round_obj(theta) ** 2))
-            new, converged, message, cost = _solve(round_obj, theta, lower, upper, max(3, max_nfev // 4), ftol)
+            new, stop, cost = _solve(round_obj, theta, lower, upper, max(3, max_nfev // 4), ftol)
         except (ValueError, FloatingPointError):
             break  # keep the estimate so far
         n_used += round_obj.n_evaluations + 2
-        obj, theta, solved = round_obj, new, (converged, message)
+        obj, theta, solved = round_obj, new, stop
         if start_cost - cost <= ftol * start_cost:
             break
     return obj, theta, n_used, solved
@@ -436,9 +461,9 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
     starts = [np.clip(s, lower, upper) for s in effect.starts] + data_starts
     costs = _start_costs(obj, starts, len(effect.starts))
     theta = starts[int(np.argmin(costs))]
-    converged, message, cost = True, "nothing to fit", float(np.min(costs))
+    stop, cost = NOTHING_SOLVED, float(np.min(costs))
     if effect.n_params:
-        theta, converged, message, cost = _solve(obj, theta, lower, upper, max_nfev, ftol)
+        theta, stop, cost = _solve(obj, theta, lower, upper, max_nfev, ftol)
         if cost > min(costs):  # never worse than the best start
             theta, cost = starts[int(np.argmin(costs))], float(np.min(costs))
     coarse_mse = cost / obj.size * scales.displacement**2
@@ -448,7 +473,7 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
     if effect.n_params and fine_signals is not None and signals.correction is not None:
         obj, theta, n_used, solved = _defect_corrected(obj, fine_signals, theta, lower, upper, max_nfev, ftol)
         n_evaluations += n_used
-        converged, message = solved or (converged, message)
+        stop = solved or stop
         coarse_cost = np.sum(obj(theta) ** 2)
         fine_obj = _Objective(effect, nominal, scales, fine_signals, y_meas, offsets)
         # The data's own starts, read off the measured motion, hold at any
@@ -466,20 +491,21 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
             # by 2e-3 at a fifth of the rate).  Fit at the reporting rate
             # itself, from the better of the coarse optimum and the data's
             # starts.
-            theta, converged, message, _ = _solve(fine_obj, fine_starts[best], lower, upper, max_nfev, ftol)
+            theta, stop, _ = _solve(fine_obj, fine_starts[best], lower, upper, max_nfev, ftol)
         n_evaluations += fine_obj.n_evaluations
         obj = fine_obj
     r = obj(theta)
     if effect.n_params:
-        stalled = stalled_near_noise(converged, np.mean(r**2) * scales.displacement**2, noise_variance)
+        stalled = stalled_near_noise(stop.converged, np.mean(r**2) * scales.displacement**2, noise_variance)
         theta, r, refit, n_used = _refit_without_outliers(obj, theta, r, stalled, lower, upper, max_nfev, ftol)
-        converged, message = refit or (converged, message)
+        stop = refit or stop
         n_evaluations += n_used
     mse = float(np.mean(r**2)) * scales.displacement**2
     _, _, physical = effect.simulator(theta, nominal, scales)
-    return EffectFit(effect, theta, physical, mse, n_evaluations, bool(converged), str(message),
+    return EffectFit(effect, theta, physical, mse, n_evaluations, bool(stop.converged), str(stop.message),
                      time.perf_counter() - start, best_data_starts,
-                     refined=fine_signals is not None or signals.correction is None, coarse_mse=coarse_mse)
+                     refined=fine_signals is not None or signals.correction is None, coarse_mse=coarse_mse,
+                     progress_db=stop.progress_db)
 
 
 def at_rate(fit, nominal, scales, signals, y_meas, offsets=False):
