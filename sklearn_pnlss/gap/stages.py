@@ -31,7 +31,7 @@ from scipy.stats import chi2
 from .candidates.clues import read_clues
 from .candidates.effects import InputDelay, delay_signal
 from .fitting.black_box import fit_black_box
-from .fitting.calibrate import _Objective, at_rate, fit_effect, parameter_information, per_signal_mse, refine_fit
+from .fitting.calibrate import at_rate, fit_effect, parameter_information, refine_fit, signal_errors
 from .results import ChannelDelay
 from .settings import SETTINGS
 from ..utils.threads import one_blas_thread
@@ -191,8 +191,7 @@ class Fitting:
         """Mean squared error of ``fit`` on each training signal at the
         fitting rate (one simulation)."""
         d = self.diagnosis
-        r = _Objective(fit.effect, d.nominal, d.scales_, self.coarse, self.y_list, d.offsets)(fit.theta)
-        return per_signal_mse(r, self.y_list) * d.scales_.displacement**2
+        return signal_errors(fit, d.nominal, d.scales_, self.coarse, self.y_list, d.offsets)
 
     def most_telling_signal(self, errors):
         """The training signal with the most error in it (``errors``: a
@@ -349,8 +348,8 @@ def hidden_delay(run):
     -70 dB), so the first look misses it.  The delay is looked for again
     on the best refined candidate: if freeing it gains ``hidden_delay_db``
     there (probed on the training signal that candidate misfits most, then
-    confirmed on all), it belongs to the measurement chain and every candidate is
-    refitted with it at the fitting rate, from its own fit and from its
+    confirmed on all), it belongs to the measurement chain and every
+    candidate is refitted with it at the fitting rate, from its own fit and from its
     clues aligned at that delay (with half the iterations: most of them
     start close; raced as the forward selection's pairs, see
     :func:`_raced`), and those in contention are refined as after the first
@@ -391,10 +390,9 @@ def hidden_delay(run):
 
     # The first look's delay is biased by the nonlinearity it could not
     # fit: the best candidate's clues are read at several delays (a start
-    # costs one simulation).
-    # Probed first on the training signal the best fit leaves the most
-    # error in (a quarter of the simulations with four signals): a delay
-    # that does not gain there does not gain on all of them.
+    # costs one simulation), on the training signal it leaves the most
+    # error in (a quarter of the simulations with four signals: a delay
+    # that gains nothing there gains nothing on all of them).
     shifts = sorted({round(float(delay_start[0]), 3), *SETTINGS.hidden_delay_shifts})
     errors = run.signal_errors(done[best.name])
     signal = run.most_telling_signal(errors)

@@ -18,8 +18,8 @@ from .simulate import FIT_MAX_PERIODS, simulate_sensitivities, simulate_signals
 from ..readings import misfit
 from ..settings import SETTINGS
 
-__all__ = ["EffectFit", "meaningful_ftol", "fit_effect", "refine_fit", "at_rate", "parameter_information",
-           "parameter_covariance"]
+__all__ = ["EffectFit", "meaningful_ftol", "fit_effect", "refine_fit", "at_rate", "signal_errors",
+           "parameter_information", "parameter_covariance"]
 
 # Residual given to a trial point that diverges or is not physical, relative
 # to the displacement scale: far above any real misfit.
@@ -508,12 +508,19 @@ def fit_effect(effect, nominal, scales, signals, y_meas, *, max_nfev=30, fine_si
                      progress_db=stop.progress_db)
 
 
+def signal_errors(fit, nominal, scales, signals, y_meas, offsets=False):
+    """Mean squared error (m^2) of ``fit`` on each of ``signals`` (one
+    simulation)."""
+    r = _Objective(fit.effect, nominal, scales, signals, y_meas, offsets)(fit.theta)
+    return per_signal_mse(r, y_meas) * scales.displacement**2
+
+
 def at_rate(fit, nominal, scales, signals, y_meas, offsets=False):
     """``fit`` with its ``coarse_mse`` taken on ``signals`` (one
     simulation): a fit made on another coarse set compared with those made
     on this one."""
-    r = _Objective(fit.effect, nominal, scales, signals, y_meas, offsets)(fit.theta)
-    return replace(fit, coarse_mse=float(np.mean(r**2)) * scales.displacement**2)
+    errors = signal_errors(fit, nominal, scales, signals, y_meas, offsets)
+    return replace(fit, coarse_mse=float(np.average(errors, weights=[y.size for y in y_meas])))
 
 
 def refine_fit(fit, nominal, scales, signals, y_meas, *, fine_signals, clues=None, **kwargs):
