@@ -3,12 +3,19 @@
 Runs withheld-effect cases of ``gap_withheld.py`` (the exact nominal, four
 realisations of four steady-state periods, 2 cores) and measures, per case:
 
-- the wall time of ``fit`` and ``report``;
+- the wall time of ``fit`` and ``report``, and of each stage of ``fit``
+  (``sklearn_pnlss.gap.stages.STAGES``);
 - per candidate: its simulations of the training set and its seconds (on
   its worker thread; each stage it went through summed);
 - the integrator's share: seconds and steps per force element and rate,
   and nanoseconds per step;
 - the black box's seconds.
+
+Cases: an effect's name or ``null`` (the clean family's first seed),
+``backlash-removed`` (its second strength, seed 501, with no backlash among
+the candidates: family e's slowest case) and ``pair:STRONG+WEAK`` (family
+t's pair, seed 0), e.g. ``--cases backlash-removed
+pair:cubic_stiffness+coulomb_friction``.
 
 The integrator is timed by wrapping ``Oscillator._run`` and
 ``Oscillator._run_tangents`` (where the code has them), so the same script
@@ -35,7 +42,7 @@ from _bench_utils import RESULTS, header
 
 import gap_withheld as gw
 import sklearn_pnlss
-from sklearn_pnlss.gap import GapDiagnosis
+from sklearn_pnlss.gap import GapDiagnosis, default_effects
 from sklearn_pnlss.physics import oscillator
 
 CASES = ["cubic_stiffness", "hysteresis", "null"]
@@ -104,19 +111,59 @@ class BlackBoxClock:
         self.module.fit_black_box = self.original
 
 
+class StageClock:
+    """Seconds of each stage of ``GapDiagnosis.fit`` (wrapped where the
+    diagnosis reads its list of stages)."""
+
+    def __enter__(self):
+        import sklearn_pnlss.gap.diagnosis as diagnosis
+
+        self.module, self.seconds = diagnosis, {}
+        self.original = getattr(diagnosis, "STAGES", None)
+        if self.original is not None:
+            diagnosis.STAGES = tuple(self._timed(stage) for stage in self.original)
+        return self
+
+    def _timed(self, stage):
+        def timed(run):
+            start = time.perf_counter()
+            out = stage(run)
+            self.seconds[stage.__name__] = round(time.perf_counter() - start, 1)
+            return out
+
+        return timed
+
+    def __exit__(self, *exc):
+        if self.original is not None:
+            self.module.STAGES = self.original
+
+
+def _case(name):
+    """(truth, seed, candidates or None) of a case name (see the module's docstring)."""
+    if name.startswith("pair:"):
+        strong, weak = name[5:].split("+")
+        (strong_name, strength), weak = next(p for p in gw.PAIRS if p[0][0] == strong and p[1] == weak)
+        return gw.pair_truth((strong_name, strength), weak, 0)[0], 0, None
+    if name.endswith("-removed"):
+        removed = name[:-len("-removed")]
+        return gw.CASES[removed][1], 501, [e for e in default_effects() if e != removed]
+    return gw.CASES[None if name == "null" else name][0], 0, None
+
+
 def run_case(name, n_jobs):
-    truth = gw.CASES[None if name == "null" else name][0]
-    u_train, y_train, u_val, y_val, _, period, _ = gw.make_data(truth, 0, "e", None)
-    with IntegratorClock() as clock, BlackBoxClock() as bb:
+    truth, seed, candidates = _case(name)
+    u_train, y_train, u_val, y_val, _, period, _ = gw.make_data(truth, seed, "e", None)
+    with IntegratorClock() as clock, BlackBoxClock() as bb, StageClock() as stages:
         start = time.perf_counter()
-        diag = GapDiagnosis(gw.NOMINAL, fs=gw.FS, period=period, n_jobs=n_jobs, random_state=0).fit(u_train, y_train)
+        diag = GapDiagnosis(gw.NOMINAL, fs=gw.FS, period=period, effects=candidates, n_jobs=n_jobs,
+                            random_state=seed).fit(u_train, y_train)
         fitted = time.perf_counter()
         report = diag.report(u_val, y_val)
         done = time.perf_counter()
     candidates = {f.effect.name: dict(seconds=round(f.seconds, 2), simulations=int(f.n_evaluations),
                                       train_db=round(10 * np.log10(f.train_mse), 2)) for f in diag.fits_}
     return dict(case=name, got=report.best_effect, seconds=round(done - start, 1), fit_s=round(fitted - start, 1),
-                report_s=round(done - fitted, 1), black_box_s=round(sum(bb.seconds), 1),
+                report_s=round(done - fitted, 1), stages=stages.seconds, black_box_s=round(sum(bb.seconds), 1),
                 candidate_seconds_sum=round(sum(c["seconds"] for c in candidates.values()), 1),
                 candidates=candidates, integrator=clock.rows(),
                 integrator_seconds=round(sum(r["seconds"] for r in clock.rows().values()), 1))
@@ -138,9 +185,11 @@ def main(argv=None):
         print(f"{name:<18} got {str(row['got']):<18} {row['seconds']:6.1f} s (fit {row['fit_s']} s, report "
               f"{row['report_s']} s; candidates {row['candidate_seconds_sum']} s on their threads, black box "
               f"{row['black_box_s']} s, integrator {row['integrator_seconds']} s)", flush=True)
+        print("    stages: " + ", ".join(f"{k} {v} s" for k, v in row["stages"].items()), flush=True)
     path = RESULTS / "gap_time.json"
     out = json.loads(path.read_text()) if path.exists() else {}
-    out[args.label] = dict(header(), commit=commit, n_jobs=args.n_jobs, rows=rows)
+    kept = [r for r in out.get(args.label, {}).get("rows", []) if r["case"] not in args.cases]
+    out[args.label] = dict(header(), commit=commit, n_jobs=args.n_jobs, rows=kept + rows)
     path.write_text(json.dumps(out, indent=1))
     print(f"written {path} ({args.label})")
     return 0
