@@ -6,10 +6,11 @@ import numpy as np
 import pytest
 from scipy.optimize import least_squares
 
-from sklearn_pnlss.gap.fitting.calibrate import (_Objective, _refit_without_outliers, _solve, fit_effect,
-                                                 meaningful_ftol, outlying_signals, parameter_covariance,
+from sklearn_pnlss.gap.fitting.calibrate import (_Objective, _progress_db, _refit_without_outliers, _solve,
+                                                 at_rate, fit_effect, meaningful_ftol, outlying_signals, parameter_covariance,
                                                  parameter_information,
-                                                 per_signal_mse, per_signal_sensitivity, stalled_near_noise)
+                                                 per_signal_mse, per_signal_sensitivity, signal_errors,
+                                                 stalled_near_noise)
 from sklearn_pnlss.gap.candidates.effects import CubicSpring, Scales, delay_signal, make_effect
 from sklearn_pnlss.gap.settings import SETTINGS
 from sklearn_pnlss.gap.verdict.noise_floor import NoiseFloor
@@ -204,6 +205,37 @@ def test_unphysical_start_is_skipped(train):
     y = simulate_signals(NOMINAL.with_forces([CubicStiffness(1e8)]), train)
     fit = fit_effect(effect, NOMINAL, _scales(train, y), train, y, max_nfev=20)
     assert fit.physical["k3"] == pytest.approx(1e8, rel=1e-6)
+
+
+def test_progress_is_the_gain_per_evaluation_of_the_last_half():
+    """A solve whose cost halves at every evaluation gains 3.01 dB per
+    evaluation; a trial point that is rejected (its cost higher) gains
+    nothing; a converged solve promises nothing more."""
+    halving = [1.0, 0.5, 0.25, 0.125]
+    assert _progress_db(halving, converged=False) == pytest.approx(10 * np.log10(2))
+    # the last half holds a rejected trial and one step: 3 dB over two evaluations
+    assert _progress_db([1.0, 0.5, 0.7, 0.25], converged=False) == pytest.approx(10 * np.log10(2) / 2)
+    assert _progress_db(halving, converged=True) == 0.0
+    assert _progress_db([1.0], converged=False) == 0.0
+
+
+def test_a_fit_on_one_signal_holds_on_the_others(train):
+    """The forward selection's race fits on one training signal: on
+    noise-free data of k3 = 1e8 N/m^3 the cubic spring fitted on the first
+    realisation alone lands on it (to 1e-6) and leaves the second at
+    round-off too; a fit's errors on each signal, weighted by their
+    lengths, are its error on all of them."""
+    y = simulate_signals(NOMINAL.with_forces([CubicStiffness(1e8)]), train)
+    scales = _scales(train, y)
+    alone = fit_effect(make_effect("cubic_stiffness"), NOMINAL, scales, train.subset([0]), y[:1], max_nfev=20)
+    assert alone.physical["k3"] == pytest.approx(1e8, rel=1e-6)
+    errors = signal_errors(alone, NOMINAL, scales, train, y)
+    assert errors.shape == (2,) and np.all(errors < 1e-22)
+    stopped = fit_effect(make_effect("cubic_stiffness"), NOMINAL, scales, train, y, max_nfev=1)
+    errors = signal_errors(stopped, NOMINAL, scales, train, y)
+    assert np.all(errors > 1e-16)  # one iteration from theta = 0 is far from round-off
+    assert at_rate(stopped, NOMINAL, scales, train, y).coarse_mse == pytest.approx(
+        np.average(errors, weights=[v.size for v in y]), rel=1e-12)
 
 
 def test_meaningful_ftol():
