@@ -534,7 +534,7 @@ def _f16_pair(key):
 
 
 FIELD_FIGURES = [
-    Figure(R, "A diagnosis takes 13 to 19 s at the median on 2 cores", "gap_withheld.py --family e, a, b, c, d",
+    Figure(R, "A diagnosis takes 14.5 to 16 s at the median on 2 cores", "gap_withheld.py --family e, a, b, c, d",
            lambda: [min(_family(f)[3] for f in "eabcd"), max(_family(f)[3] for f in "eabcd"), 2], slack=0.5),
     Figure(R, "| WH2009 | `BLAEstimator(6)` | 57.42 mV | 2.1 s | |", FIELD,
            lambda: [_field("wh2009", "BLA")["settings"]["n_states"], _field("wh2009", "BLA")["test_rmse"],
@@ -938,7 +938,7 @@ FIGURES = [
     Figure(GAP, "(a) the nominal read off the BLA of the same data (:func:`~sklearn_pnlss.gap.linear_nominal`), "
                 "two seeds at both strengths of every effect, and three effects removed from the candidates (52 "
                 "cases): the right effect in 44 of 44 effect cases, no false alarm, ``\"unexplained\"`` in 6 of 6 "
-                "removed cases, 14 s per diagnosis (median), 36 s at most (a removed hysteresis; 82 s and 178 s "
+                "removed cases, 15 s per diagnosis (median), 26 s at most (a removed hysteresis; 82 s and 178 s "
                 "before this code's speed-ups); the stiff backlash closes 100.0 % with the nominal's "
                 "mass, damping and stiffness recalibrated by +4 %, -44 % and -13 %",
            "gap_withheld.py --family a",
@@ -953,8 +953,8 @@ FIGURES = [
                 "(``--strengths 2``, 52 cases): the right effect in 44 of 44 effect cases, the stiff backlash "
                 "included (closing 100.0 % under a nominal 13-20 % off), a channel delay under the nominal's errors "
                 "named ``recalibration`` with the delay, ``recalibration`` without an effect, ``\"unexplained\"`` in "
-                "6 of 6 removed cases, 16 s per diagnosis (median; 93 s before this code's speed-ups), 52 s at most "
-                "(a removed backlash; the others 27 s at most)",
+                "6 of 6 removed cases, 15 s per diagnosis (median; 93 s before this code's speed-ups), 42 s at most "
+                "(a removed backlash; the others 24 s at most)",
            "gap_withheld.py --family b (before: the run on 249ef31)",
            lambda: [10 * _source_of("benchmarks/gap_withheld.py", "rng.uniform(0.1, 0.3, 3)"), 30, 2,
                     len(_results("gap_withheld_family_b")["rows"]), *_family("b")[:2],
@@ -966,8 +966,8 @@ FIGURES = [
                     sorted(r["seconds"] for r in _results("gap_withheld_family_b")["rows"])[-2]], slack=1.0),
     Figure(GAP, "cycled over the effects), two seeds at both strengths of every effect, and three effects removed "
                 "from the candidates (52 cases): the right effect in 44 of 44 effect cases, no false alarm, "
-                "``\"unexplained\"`` in 6 of 6 removed cases, 19 s per diagnosis (median; 67 s before this code's "
-                "speed-ups; records that are not periodic leave no black box to fit), 29 s at most.",
+                "``\"unexplained\"`` in 6 of 6 removed cases, 15 s per diagnosis (median; 67 s before this code's "
+                "speed-ups; records that are not periodic leave no black box to fit), 30 s at most.",
            "gap_withheld.py --family c (before: the run on 8146224)",
            lambda: [len(_results("gap_withheld_family_c")["rows"]), *_family("c")[:2], *_family("c")[4:],
                     _family("c")[3] if _family("c")[2] else -1, 67,
@@ -988,7 +988,7 @@ FIGURES = [
                 "effects removed from the candidates (``--strengths 2``, 52 cases): the right effect in 44 of 44 "
                 "effect cases, the delay without an effect named ``input_delay``, a nominal stiffness 5 % off (alone, "
                 "or with the damping 30 % off) named ``recalibration`` with the channel delay, ``\"unexplained\"`` in "
-                "6 of 6 removed cases, 18 s per diagnosis (median; 98 s before this code's speed-ups), 58 s at most (a "
+                "6 of 6 removed cases, 16 s per diagnosis (median; 98 s before this code's speed-ups), 48 s at most (a "
                 "stiff backlash, the delay found behind it; 399 s before",
            "gap_withheld.py --family d (before: the run on def964f)",
            lambda: [4 * _source_of("benchmarks/gap_withheld.py", "butter(4, 300.0"), 300, 2,
@@ -1009,7 +1009,7 @@ FIGURES = [
                     0.5e3 / 750, 1e3 / 750, 1.5e3 / 750], slack=0.01),
     Figure(GAP, "Left out, the second seed's stiff backlash closed 99.998 % of the achievable in families a, b "
                 "and e; on the present code it closes 96.9 % in family a, 95.5 % in family b and 97.4 % in family e "
-                "(18 s, 15 s and 16 s; 346 s in family b before)",
+                "(18 s, 17 s and 18 s; 346 s in family b before)",
            "gap_withheld.py --family a, b, e (backlash, seed 101; before: the rows on 38bbb02 and the earlier runs)",
            lambda: [99.998, *[100 * _case(f, "backlash", 101)["closure_vs_achievable"] for f in "abe"],
                     *[_case(f, "backlash", 101)["seconds"] for f in "abe"], 346],
@@ -1057,15 +1057,16 @@ FIGURES = [
                sum(summary["second_named_where_it_pays"]), len(summary["second_named_where_it_pays"])])(
                *_family_t())),
     Figure(GAP, "the pair closes 93.7 % for the cubic spring with friction at half its error, the others 98 % or "
-                "more; 38 s per diagnosis (median), 63 s at most (96 s and 163 s before this code's speed-ups, 57 s "
-                "and 82 s before the pairs were raced; the forward selection fits each of the three best candidates "
-                "with every other effect, 4 iterations each, and carries on the 3 best",
-           "gap_withheld.py --family t: results/gap_withheld_family_t.json (before: the file at 868630d and at "
-           "6de7de0); gap.settings",
+                "more; 26 s per diagnosis (median), 37 s at most (96 s and 163 s before this code's speed-ups, 57 s "
+                "and 82 s before the pairs were raced, 38 s and 63 s before they were raced on one training signal; "
+                "the forward selection fits each of the three best candidates with every other effect, 4 iterations "
+                "each, and carries on the 3 best",
+           "gap_withheld.py --family t: results/gap_withheld_family_t.json (before: the file at 868630d, at "
+           "6de7de0 and at b431246); gap.settings",
            lambda: (lambda summary, rows: [
                100 * min(r["combinations"][0][2] for r in rows),
                100 * sorted(r["combinations"][0][2] for r in rows)[1], summary["median_seconds"],
-               summary["max_seconds"], 96, 163, 57, 82, _setting("race_iterations"),
+               summary["max_seconds"], 96, 163, 57, 82, 38, 63, _setting("race_iterations"),
                _setting("race_survivors")])(*_family_t()), slack=0.5),
     Figure(GAP, "a structure of 0.5-5 kg, 8-40 Hz and 1-5 % damping; 2-5 realisations of 2-4 periods of 4096 "
                 "or 8192 samples, excited from 2 Hz to four times the natural frequency at 10-100 N rms; noise "
@@ -1107,7 +1108,7 @@ FIGURES = [
            lambda: [_setting("needle_reach_db"), _setting("jump_ratio")]),
     Figure(GAP, "On the clean family's first seed the crawl had stopped 0.15 % off in every parameter (-101.5 dB "
                 "against the floor's -102.7 dB, 225 s); the refit without its needle signal reaches the floor "
-                "(100.0 %, 20 s on the present code).",
+                "(100.0 %, 24 s on the present code).",
            "gap_withheld.py --family e (backlash, seed 100; before: the row on 328f3cc)",
            lambda: [0.15, -101.5, -102.7, 225, *(lambda r: [100 * r["closure_vs_achievable"], r["seconds"]])(
                _case("e", "backlash", 100))], slack=1.0),
@@ -1165,7 +1166,24 @@ FIGURES = [
            "benchmarks/gap_withheld.py (its case, and the rms of its simulated training response)",
            lambda: [3e4 * _source_of("benchmarks/gap_withheld.py", "DeadZoneSpring(3e4, 2.5e-3)"), 2.5,
                     1e3 * _withheld_backlash_rms()]),
-    Figure(GAP, "13 s per diagnosis (median), 69 s at most (a removed backlash), with", WITHHELD,
+    Figure(GAP, "backlash it cannot fit was carried on for 15.9 s before (``bench_gap_time.py``, the removed "
+                "backlash), 0 s now", "bench_gap_time.py: gap_time.json (session35_before, session35_after)",
+           lambda: [_gap_time(label, "backlash-removed")["stages"]["polish_leader"]
+                    for label in ("session35_before", "session35_after")]),
+    Figure(GAP, "the removed backlash 68.9 -> 32.1 s (the leader carried on 15.9 -> 0 s, the hidden delay 7.7 -> "
+                "2.5 s, the forward selection 21.1 -> 6.1 s), the cubic spring with friction of family t 56.4 -> "
+                "36.2 s, the three cases above unchanged (13.5 and 13.6 s, 17.3 and 15.2 s, 15.2 and 14.8 s)",
+           "bench_gap_time.py: gap_time.json (session35_before, session35_after)",
+           lambda: [*[v for label in ("session35_before", "session35_after")
+                      for v in [_gap_time(label, "backlash-removed")["seconds"]]],
+                    *[_gap_time(label, "backlash-removed")["stages"][stage]
+                      for stage in ("polish_leader", "hidden_delay", "added_effects")
+                      for label in ("session35_before", "session35_after")],
+                    *[_gap_time(label, "pair:cubic_stiffness+coulomb_friction")["seconds"]
+                      for label in ("session35_before", "session35_after")],
+                    *[_gap_time(label, name)["seconds"] for name in ("cubic_stiffness", "hysteresis", "null")
+                      for label in ("session35_before", "session35_after")]]),
+    Figure(GAP, "14.5 s per diagnosis (median), 28 s at most (a removed backlash), with", WITHHELD,
            lambda: [_results("gap_withheld")["summary"]["median_seconds"],
                     _results("gap_withheld")["summary"]["max_seconds"]], slack=1.0),
 ]

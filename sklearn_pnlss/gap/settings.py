@@ -115,8 +115,9 @@ class GapSettings:
     #: family t, raced on every signal, the same 12 verdicts and pairs as
     #: every pair fitted in full, the right pair among the 3 carried on in
     #: every case; the diagnosis 46 s at the median instead of 57 s.  Raced
-    #: on one signal of four, the forward selection of the cubic spring with
-    #: friction took 9 s instead of 28 s.
+    #: on one signal of four, the same 12 verdicts and pairs, 26 s at the
+    #: median (family t's cubic spring with friction: its forward selection
+    #: 9.3 s instead of 25.8 s, ``bench_gap_time.py``).
     race_iterations: int = 4
     race_survivors: int = 3
 
