@@ -534,7 +534,7 @@ def _f16_pair(key):
 
 
 FIELD_FIGURES = [
-    Figure(R, "A diagnosis takes 14.5 to 16 s at the median on 2 cores", "gap_withheld.py --family e, a, b, c, d",
+    Figure(R, "A diagnosis takes 14 to 16 s at the median on 2 cores", "gap_withheld.py --family e, a, b, c, d",
            lambda: [min(_family(f)[3] for f in "eabcd"), max(_family(f)[3] for f in "eabcd"), 2], slack=0.5),
     Figure(R, "| WH2009 | `BLAEstimator(6)` | 57.42 mV | 2.1 s | |", FIELD,
            lambda: [_field("wh2009", "BLA")["settings"]["n_states"], _field("wh2009", "BLA")["test_rmse"],
@@ -1009,7 +1009,7 @@ FIGURES = [
                     0.5e3 / 750, 1e3 / 750, 1.5e3 / 750], slack=0.01),
     Figure(GAP, "Left out, the second seed's stiff backlash closed 99.998 % of the achievable in families a, b "
                 "and e; on the present code it closes 96.9 % in family a, 95.5 % in family b and 97.4 % in family e "
-                "(18 s, 17 s and 18 s; 346 s in family b before)",
+                "(18 s, 17 s and 16 s; 346 s in family b before)",
            "gap_withheld.py --family a, b, e (backlash, seed 101; before: the rows on 38bbb02 and the earlier runs)",
            lambda: [99.998, *[100 * _case(f, "backlash", 101)["closure_vs_achievable"] for f in "abe"],
                     *[_case(f, "backlash", 101)["seconds"] for f in "abe"], 346],
@@ -1108,7 +1108,7 @@ FIGURES = [
            lambda: [_setting("needle_reach_db"), _setting("jump_ratio")]),
     Figure(GAP, "On the clean family's first seed the crawl had stopped 0.15 % off in every parameter (-101.5 dB "
                 "against the floor's -102.7 dB, 225 s); the refit without its needle signal reaches the floor "
-                "(100.0 %, 24 s on the present code).",
+                "(100.0 %, 20 s on the present code).",
            "gap_withheld.py --family e (backlash, seed 100; before: the row on 328f3cc)",
            lambda: [0.15, -101.5, -102.7, 225, *(lambda r: [100 * r["closure_vs_achievable"], r["seconds"]])(
                _case("e", "backlash", 100))], slack=1.0),
@@ -1183,7 +1183,7 @@ FIGURES = [
                       for label in ("session35_before", "session35_after")],
                     *[_gap_time(label, name)["seconds"] for name in ("cubic_stiffness", "hysteresis", "null")
                       for label in ("session35_before", "session35_after")]]),
-    Figure(GAP, "14.5 s per diagnosis (median), 28 s at most (a removed backlash), with", WITHHELD,
+    Figure(GAP, "14 s per diagnosis (median), 36 s at most (a removed backlash), with", WITHHELD,
            lambda: [_results("gap_withheld")["summary"]["median_seconds"],
                     _results("gap_withheld")["summary"]["max_seconds"]], slack=1.0),
 ]
