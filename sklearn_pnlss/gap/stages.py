@@ -31,7 +31,7 @@ from scipy.stats import chi2
 from .candidates.clues import read_clues
 from .candidates.effects import InputDelay, delay_signal
 from .fitting.black_box import fit_black_box
-from .fitting.calibrate import at_rate, fit_effect, parameter_information, refine_fit, signal_errors
+from .fitting.calibrate import at_rate, fit_effect, parameter_information, pooled_mse, refine_fit, signal_errors
 from .results import ChannelDelay
 from .settings import SETTINGS
 from ..utils.threads import one_blas_thread
@@ -221,6 +221,12 @@ class Fitting:
         return [self.done[e.name] for e in self.effects if e.name in self.done
                 and (e.is_recalibration or (self.delay is not None and e.name == "input_delay"))]
 
+    def nominal_excess_db(self):
+        """The nominal's training error over the noise floor, dB (0 without
+        a floor): the scale the verdict's tie is a share of."""
+        d = self.diagnosis
+        return 0.0 if d.noise_ is None else d.train_gap_db_ - 10 * np.log10(d.noise_.variance)
+
     def adds_to(self, fit, nested):
         """Whether ``fit`` explains more of the training data than
         ``nested``, the fit it contains, by what the verdict could tell on
@@ -239,7 +245,7 @@ class Fitting:
         n_samples = sum(y.size for y in self.y_list)
         extra = max(fit.effect.n_params - nested.effect.n_params, 1)
         gain = (nested.coarse_mse - fit.coarse_mse) * n_samples * d.noise_.dof_per_sample / d.noise_.variance
-        excess_db = d.train_gap_db_ - 10 * np.log10(d.noise_.variance)
+        excess_db = self.nominal_excess_db()
         gain_db = 10 * np.log10(nested.coarse_mse / fit.coarse_mse)
         return bool(gain > chi2.ppf(1 - d.significance, extra) and gain_db > SETTINGS.tie_closure * excess_db)
 
@@ -349,8 +355,8 @@ def hidden_delay(run):
     on the best refined candidate: if freeing it gains ``hidden_delay_db``
     there (probed on the training signal that candidate misfits most, then
     confirmed on all), it belongs to the measurement chain and every
-    candidate is refitted with it at the fitting rate, from its own fit and from its
-    clues aligned at that delay (with half the iterations: most of them
+    candidate is refitted with it at the fitting rate, from its own fit and
+    from its clues aligned at that delay (with half the iterations: most of them
     start close; raced as the forward selection's pairs, see
     :func:`_raced`), and those in contention are refined as after the first
     fits (:func:`refine_contenders`; refining every one cost family d's
@@ -446,9 +452,7 @@ def _budget_worth_db(run):
     ``leader_progress_db``, and the verdict's tie (``tie_closure`` of the
     nominal's excess over the noise, dB), below which no closure it
     compares moves."""
-    d = run.diagnosis
-    excess_db = 0.0 if d.noise_ is None else d.train_gap_db_ - 10 * np.log10(d.noise_.variance)
-    return max(SETTINGS.leader_progress_db, SETTINGS.tie_closure * excess_db)
+    return max(SETTINGS.leader_progress_db, SETTINGS.tie_closure * run.nominal_excess_db())
 
 
 def _carried_on(run, fit):
@@ -503,7 +507,7 @@ def added_effects(run):
     if not refined:
         return
     leader, bases = refined[0], [(physical[f.effect.name], f) for f in refined[:SETTINGS.forward_bases]]
-    nominal_excess_db = d.train_gap_db_ - 10 * np.log10(d.noise_.variance)
+    nominal_excess_db = run.nominal_excess_db()
     for _ in range(SETTINGS.max_added_effects):
         left_db = 10 * np.log10(max(leader.train_mse / d.noise_.variance, 1.0))
         if nominal_excess_db <= 0 or 1 - left_db / nominal_excess_db >= SETTINGS.explained_closure:
@@ -544,7 +548,7 @@ def _reach(run, fit, errors, budget):
     with more iterations than that beat it by iterations alone (a
     hysteresis with an input saturation, 0.03 dB better on training,
     then a third effect looked for: 41 s).  Both at the fitting rate."""
-    now = float(np.average(errors, weights=[y.size for y in run.y_list]))
+    now = pooled_mse(errors, run.y_list)
     return replace(fit, coarse_mse=now * 10 ** (-fit.progress_db * budget / 10))
 
 

@@ -18,7 +18,7 @@ from .simulate import FIT_MAX_PERIODS, simulate_sensitivities, simulate_signals
 from ..readings import misfit
 from ..settings import SETTINGS
 
-__all__ = ["EffectFit", "meaningful_ftol", "fit_effect", "refine_fit", "at_rate", "signal_errors",
+__all__ = ["EffectFit", "meaningful_ftol", "fit_effect", "refine_fit", "at_rate", "signal_errors", "pooled_mse",
            "parameter_information", "parameter_covariance"]
 
 # Residual given to a trial point that diverges or is not physical, relative
@@ -515,12 +515,17 @@ def signal_errors(fit, nominal, scales, signals, y_meas, offsets=False):
     return per_signal_mse(r, y_meas) * scales.displacement**2
 
 
+def pooled_mse(errors, y_meas):
+    """The mean squared error over all of ``y_meas`` from each signal's
+    (``errors``, as :func:`signal_errors` gives them)."""
+    return float(np.average(errors, weights=[y.size for y in y_meas]))
+
+
 def at_rate(fit, nominal, scales, signals, y_meas, offsets=False):
     """``fit`` with its ``coarse_mse`` taken on ``signals`` (one
     simulation): a fit made on another coarse set compared with those made
     on this one."""
-    errors = signal_errors(fit, nominal, scales, signals, y_meas, offsets)
-    return replace(fit, coarse_mse=float(np.average(errors, weights=[y.size for y in y_meas])))
+    return replace(fit, coarse_mse=pooled_mse(signal_errors(fit, nominal, scales, signals, y_meas, offsets), y_meas))
 
 
 def refine_fit(fit, nominal, scales, signals, y_meas, *, fine_signals, clues=None, **kwargs):
