@@ -9,6 +9,7 @@ from ..statespace.linear import frequency_response, modal_parameters, simulate_l
 from ..statespace.scaled import linear_scaled_model
 from ..statespace.subspace import fd_refine, fd_subspace, frf_weights
 from ..utils.parameters import Interval, validates_parameters
+from ..utils.threads import blas_threads_for
 from ..utils.validation import check_period
 from ._base import SignalRegressorBase
 
@@ -272,7 +273,11 @@ class BLAEstimator(SignalRegressorBase):
             records = [(U - self.input_offset_, Y - self.output_offset_) for U, Y in zip(X_list, y_list)]
         else:
             self._fit_periodic(X_list, y_list, period)
-        self._fit_parametric(records)
+        # the subspace step's QR (lines by block rows times channels) is the
+        # largest product; on one BLAS thread below a few hundred Mflop
+        n_lines, p, m = self.frf_.shape
+        with blas_threads_for(2 * (2 * n_lines * m) * (3 * self.n_states * (m + p)) ** 2):
+            self._fit_parametric(records)
         return self
 
     def _fit_periodic(self, X_list, y_list, period):

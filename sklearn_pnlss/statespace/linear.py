@@ -16,6 +16,36 @@ __all__ = [
 
 @numba.njit(cache=True, nogil=True)
 def _lsim_kernel(A, B, C, D, U, x0):
+    # Explicit loops: a small matrix product per sample (``C @ x``) allocates
+    # its result, which cost 20 times the arithmetic at three states.
+    n_samples, m = U.shape
+    n, p = A.shape[0], C.shape[0]
+    Y = np.empty((n_samples, p))
+    x = x0.copy()
+    xn = np.empty(n)
+    for t in range(n_samples):
+        for i in range(p):
+            acc = 0.0
+            for j in range(n):
+                acc += C[i, j] * x[j]
+            for j in range(m):
+                acc += D[i, j] * U[t, j]
+            Y[t, i] = acc
+        for i in range(n):
+            acc = 0.0
+            for j in range(n):
+                acc += A[i, j] * x[j]
+            for j in range(m):
+                acc += B[i, j] * U[t, j]
+            xn[i] = acc
+        x[:] = xn
+    return Y, x
+
+
+@numba.njit(cache=True, nogil=True)
+def _lsim_kernel_blas(A, B, C, D, U, x0):
+    # Many states: the products by BLAS (its call costs less than the
+    # arithmetic from about 32 states on).
     n_samples = U.shape[0]
     n = A.shape[0]
     Y = np.empty((n_samples, C.shape[0]))
@@ -26,6 +56,13 @@ def _lsim_kernel(A, B, C, D, U, x0):
         xn[:] = A @ x + B @ U[t]
         x[:] = xn
     return Y, x
+
+
+# States from which the per-sample products go through BLAS (measured on
+# 20,000 samples: 24 states 5.5 ms by loops against 9.7 ms by BLAS, 32
+# states 9.9 against 10.9 ms, 40 states 15.2 against 11.6 ms; 3 states
+# and 32,768 samples 0.5 against 11.3 ms).
+_BLAS_STATES = 36
 
 
 def simulate_linear(A, B, C, D, U, x0=None):
@@ -46,7 +83,8 @@ def simulate_linear(A, B, C, D, U, x0=None):
     A, B, C, D = (np.ascontiguousarray(M, dtype=np.float64) for M in (A, B, C, D))
     U = np.ascontiguousarray(U, dtype=np.float64)
     x0 = np.zeros(A.shape[0]) if x0 is None else np.asarray(x0, dtype=np.float64)
-    return _lsim_kernel(A, B, C, D, U, x0)
+    kernel = _lsim_kernel_blas if A.shape[0] >= _BLAS_STATES else _lsim_kernel
+    return kernel(A, B, C, D, U, x0)
 
 
 # Above this condition number of A's eigenvectors, the resolvent is solved
