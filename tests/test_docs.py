@@ -967,7 +967,7 @@ FIGURES = [
     Figure(GAP, "cycled over the effects), two seeds at both strengths of every effect, and three effects removed "
                 "from the candidates (52 cases): the right effect in 44 of 44 effect cases, no false alarm, "
                 "``\"unexplained\"`` in 6 of 6 removed cases, 15 s per diagnosis (median; 67 s before this code's "
-                "speed-ups; records that are not periodic leave no black box to fit), 30 s at most.",
+                "speed-ups; records that are not periodic leave no black box to fit), 28 s at most.",
            "gap_withheld.py --family c (before: the run on 8146224)",
            lambda: [len(_results("gap_withheld_family_c")["rows"]), *_family("c")[:2], *_family("c")[4:],
                     _family("c")[3] if _family("c")[2] else -1, 67,
