@@ -248,24 +248,29 @@ def main(argv=None):
     parser.add_argument("--pyvib-python", default=sys.executable, help="interpreter with pyvib's dependencies")
     parser.add_argument("--output", default=str(DEFAULT_OUTPUT))
     args = parser.parse_args(argv)
+    # The sections not rerun (the converged fits, the peer) are kept as they
+    # were measured, each with the date of its run.
+    previous = json.loads(Path(args.output).read_text()) if Path(args.output).exists() else {}
     results = header()
+    for section in ("speed", "compile", "accuracy", "peer"):
+        if section in previous:
+            results[section] = previous[section]
+            results[f"{section}_date"] = previous.get(f"{section}_date", previous.get("date"))
     if args.accuracy_only:
-        previous = json.loads(Path(args.output).read_text()) if Path(args.output).exists() else {}
-        previous.update(results)
         print("accuracy (converged fits, official test sets)")
-        previous["accuracy"] = _accuracy(args.data_dir)
-        write_results(previous, args.output)
+        results["accuracy"], results["accuracy_date"] = _accuracy(args.data_dir), results["date"]
+        write_results(results, args.output)
         return
 
     print("numba compilation (first fit in a fresh interpreter, small problem)")
     with tempfile.TemporaryDirectory() as empty_cache:
         cold = first_call(_FIRST_CALL, empty_cache)
     warm = first_call(_FIRST_CALL)
-    results["compile"] = {"cold_cache": cold, "warm_cache": warm}
+    results["compile"], results["compile_date"] = {"cold_cache": cold, "warm_cache": warm}, results["date"]
     print(f"  cold cache: compile {cold['compile_or_load']:.2f} s;  warm cache: load {warm['compile_or_load']:.2f} s")
 
     print(f"timed fits ({args.iterations} LM iterations, median of {args.repeat})")
-    results["speed"] = _speed(args.data_dir, args.iterations, args.repeat)
+    results["speed"], results["speed_date"] = _speed(args.data_dir, args.iterations, args.repeat), results["date"]
 
     if args.pyvib_path:
         print(f"peer: pyvib from {args.pyvib_path}, one thread, {args.iterations} iterations")
@@ -277,7 +282,7 @@ def main(argv=None):
             "lm_iteration": peer["t_per_iter_s"] / ours["t_per_iter_s"],
             "fit_end_to_end": peer["t_total_s"] / ours["t_fit_s"],
         }
-        results["peer"] = {"pyvib": peer, "speedup": ratios}
+        results["peer"], results["peer_date"] = {"pyvib": peer, "speedup": ratios}, results["date"]
         print(f"  pyvib: jacobian {peer['t_jacobian_s']:.2f} s, iteration {peer['t_per_iter_s']:.2f} s, "
               f"fit {peer['t_total_s']:.1f} s ({peer['n_iter']} it); "
               f"test {peer['db_multisine']:.2f} / {peer['db_sweep']:.2f} dB")
@@ -286,7 +291,7 @@ def main(argv=None):
 
     if args.accuracy:
         print("accuracy (converged fits, official test sets)")
-        results["accuracy"] = _accuracy(args.data_dir)
+        results["accuracy"], results["accuracy_date"] = _accuracy(args.data_dir), results["date"]
     write_results(results, args.output)
 
 

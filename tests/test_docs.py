@@ -534,7 +534,7 @@ def _f16_pair(key):
 
 
 FIELD_FIGURES = [
-    Figure(R, "A diagnosis takes 14 to 16 s at the median on 2 cores", "gap_withheld.py --family e, a, b, c, d",
+    Figure(R, "A diagnosis takes 11 to 15 s at the median on 2 cores", "gap_withheld.py --family e, a, b, c, d",
            lambda: [min(_family(f)[3] for f in "eabcd"), max(_family(f)[3] for f in "eabcd"), 2], slack=0.5),
     Figure(R, "| WH2009 | `BLAEstimator(6)` | 57.42 mV | 2.1 s | |", FIELD,
            lambda: [_field("wh2009", "BLA")["settings"]["n_states"], _field("wh2009", "BLA")["test_rmse"],
@@ -938,7 +938,7 @@ FIGURES = [
     Figure(GAP, "(a) the nominal read off the BLA of the same data (:func:`~sklearn_pnlss.gap.linear_nominal`), "
                 "two seeds at both strengths of every effect, and three effects removed from the candidates (52 "
                 "cases): the right effect in 44 of 44 effect cases, no false alarm, ``\"unexplained\"`` in 6 of 6 "
-                "removed cases, 15 s per diagnosis (median), 26 s at most (a removed hysteresis; 82 s and 178 s "
+                "removed cases, 11 s per diagnosis (median), 23 s at most (a removed hysteresis; 82 s and 178 s "
                 "before this code's speed-ups); the stiff backlash closes 100.0 % with the nominal's "
                 "mass, damping and stiffness recalibrated by +4 %, -44 % and -13 %",
            "gap_withheld.py --family a",
@@ -953,8 +953,8 @@ FIGURES = [
                 "(``--strengths 2``, 52 cases): the right effect in 44 of 44 effect cases, the stiff backlash "
                 "included (closing 100.0 % under a nominal 13-20 % off), a channel delay under the nominal's errors "
                 "named ``recalibration`` with the delay, ``recalibration`` without an effect, ``\"unexplained\"`` in "
-                "6 of 6 removed cases, 15 s per diagnosis (median; 93 s before this code's speed-ups), 42 s at most "
-                "(a removed backlash; the others 24 s at most)",
+                "6 of 6 removed cases, 12 s per diagnosis (median; 93 s before this code's speed-ups), 37 s at most "
+                "(a removed backlash; the others 22 s at most)",
            "gap_withheld.py --family b (before: the run on 249ef31)",
            lambda: [10 * _source_of("benchmarks/gap_withheld.py", "rng.uniform(0.1, 0.3, 3)"), 30, 2,
                     len(_results("gap_withheld_family_b")["rows"]), *_family("b")[:2],
@@ -988,7 +988,7 @@ FIGURES = [
                 "effects removed from the candidates (``--strengths 2``, 52 cases): the right effect in 44 of 44 "
                 "effect cases, the delay without an effect named ``input_delay``, a nominal stiffness 5 % off (alone, "
                 "or with the damping 30 % off) named ``recalibration`` with the channel delay, ``\"unexplained\"`` in "
-                "6 of 6 removed cases, 16 s per diagnosis (median; 98 s before this code's speed-ups), 48 s at most (a "
+                "6 of 6 removed cases, 13 s per diagnosis (median; 98 s before this code's speed-ups), 39 s at most (a "
                 "stiff backlash, the delay found behind it; 399 s before",
            "gap_withheld.py --family d (before: the run on def964f)",
            lambda: [4 * _source_of("benchmarks/gap_withheld.py", "butter(4, 300.0"), 300, 2,
@@ -1009,7 +1009,7 @@ FIGURES = [
                     0.5e3 / 750, 1e3 / 750, 1.5e3 / 750], slack=0.01),
     Figure(GAP, "Left out, the second seed's stiff backlash closed 99.998 % of the achievable in families a, b "
                 "and e; on the present code it closes 96.9 % in family a, 95.5 % in family b and 97.4 % in family e "
-                "(18 s, 17 s and 16 s; 346 s in family b before)",
+                "(14 s, 14 s and 14 s; 346 s in family b before)",
            "gap_withheld.py --family a, b, e (backlash, seed 101; before: the rows on 38bbb02 and the earlier runs)",
            lambda: [99.998, *[100 * _case(f, "backlash", 101)["closure_vs_achievable"] for f in "abe"],
                     *[_case(f, "backlash", 101)["seconds"] for f in "abe"], 346],
@@ -1057,16 +1057,16 @@ FIGURES = [
                sum(summary["second_named_where_it_pays"]), len(summary["second_named_where_it_pays"])])(
                *_family_t())),
     Figure(GAP, "the pair closes 93.7 % for the cubic spring with friction at half its error, the others 98 % or "
-                "more; 26 s per diagnosis (median), 37 s at most (96 s and 163 s before this code's speed-ups, 57 s "
-                "and 82 s before the pairs were raced, 38 s and 63 s before they were raced on one training signal; "
-                "the forward selection fits each of the three best candidates with every other effect, 4 iterations "
+                "more; 20 s per diagnosis (median), 31 s at most (96 s and 163 s before this code's speed-ups, 57 s "
+                "and 82 s before the pairs were raced, 38 s and 63 s before they were raced on one training signal, "
+                "26 s and 37 s before the black box started from the linear model; the forward selection fits each of the three best candidates with every other effect, 4 iterations "
                 "each, and carries on the 3 best",
            "gap_withheld.py --family t: results/gap_withheld_family_t.json (before: the file at 868630d, at "
-           "6de7de0 and at b431246); gap.settings",
+           "6de7de0, at b431246 and at 74520a2); gap.settings",
            lambda: (lambda summary, rows: [
                100 * min(r["combinations"][0][2] for r in rows),
                100 * sorted(r["combinations"][0][2] for r in rows)[1], summary["median_seconds"],
-               summary["max_seconds"], 96, 163, 57, 82, 38, 63, _setting("race_iterations"),
+               summary["max_seconds"], 96, 163, 57, 82, 38, 63, 26, 37, _setting("race_iterations"),
                _setting("race_survivors")])(*_family_t()), slack=0.5),
     Figure(GAP, "a structure of 0.5-5 kg, 8-40 Hz and 1-5 % damping; 2-5 realisations of 2-4 periods of 4096 "
                 "or 8192 samples, excited from 2 Hz to four times the natural frequency at 10-100 N rms; noise "
@@ -1108,7 +1108,7 @@ FIGURES = [
            lambda: [_setting("needle_reach_db"), _setting("jump_ratio")]),
     Figure(GAP, "On the clean family's first seed the crawl had stopped 0.15 % off in every parameter (-101.5 dB "
                 "against the floor's -102.7 dB, 225 s); the refit without its needle signal reaches the floor "
-                "(100.0 %, 20 s on the present code).",
+                "(100.0 %, 18 s on the present code).",
            "gap_withheld.py --family e (backlash, seed 100; before: the row on 328f3cc)",
            lambda: [0.15, -101.5, -102.7, 225, *(lambda r: [100 * r["closure_vs_achievable"], r["seconds"]])(
                _case("e", "backlash", 100))], slack=1.0),
@@ -1183,7 +1183,7 @@ FIGURES = [
                       for label in ("session35_before", "session35_after")],
                     *[_gap_time(label, name)["seconds"] for name in ("cubic_stiffness", "hysteresis", "null")
                       for label in ("session35_before", "session35_after")]]),
-    Figure(GAP, "14 s per diagnosis (median), 36 s at most (a removed backlash), with", WITHHELD,
+    Figure(GAP, "11 s per diagnosis (median), 25 s at most (a removed backlash), with", WITHHELD,
            lambda: [_results("gap_withheld")["summary"]["median_seconds"],
                     _results("gap_withheld")["summary"]["max_seconds"]], slack=1.0),
 ]

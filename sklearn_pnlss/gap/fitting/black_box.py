@@ -18,13 +18,12 @@ N_STATES = 3
 N_BRANCHES = 3
 DEGREE = 7
 # Started from the linear model (random branches, the better of N_STARTS
-# by training error), not from a full PNLSS model first: measured on five
-# withheld-effect cases (family e's hysteresis, cubic spring and second
-# mode, family t's cubic spring with quadratic damping and backlash with
-# quadratic damping), 2.2-3.0 s of CPU instead of 5.8-8.1 s, its validation
-# error within 1 dB of the full model's start in three, 19 dB lower on one
-# multisine (and 6 dB higher on its sweep), 7 dB higher on one; one start
-# alone was 32 dB higher there.
+# by training error), not from a full PNLSS model first (the setting
+# before): on five withheld-effect cases (benchmarks/bench_black_box.py,
+# one BLAS thread as in a diagnosis) 2.0-2.9 s of CPU instead of 3.4-4.1 s;
+# validation errors within 1.3 dB on two, 15-19 dB lower on the multisines
+# of two others (6 dB higher on one's sweep), 5-7 dB higher on the fifth,
+# where a single start was 31 dB higher.
 N_STARTS = 2
 
 
