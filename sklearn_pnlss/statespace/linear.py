@@ -14,30 +14,28 @@ __all__ = [
 ]
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _affine(M, x, N, u, out):
+    """out = M x + N u, written out."""
+    for i in range(M.shape[0]):
+        acc = 0.0
+        for j in range(x.shape[0]):
+            acc += M[i, j] * x[j]
+        for j in range(u.shape[0]):
+            acc += N[i, j] * u[j]
+        out[i] = acc
+
+
 @numba.njit(cache=True, nogil=True)
 def _lsim_kernel(A, B, C, D, U, x0):
     # Explicit loops: a small matrix product per sample (``C @ x``) allocates
     # its result, which cost 20 times the arithmetic at three states.
-    n_samples, m = U.shape
-    n, p = A.shape[0], C.shape[0]
-    Y = np.empty((n_samples, p))
+    Y = np.empty((U.shape[0], C.shape[0]))
     x = x0.copy()
-    xn = np.empty(n)
-    for t in range(n_samples):
-        for i in range(p):
-            acc = 0.0
-            for j in range(n):
-                acc += C[i, j] * x[j]
-            for j in range(m):
-                acc += D[i, j] * U[t, j]
-            Y[t, i] = acc
-        for i in range(n):
-            acc = 0.0
-            for j in range(n):
-                acc += A[i, j] * x[j]
-            for j in range(m):
-                acc += B[i, j] * U[t, j]
-            xn[i] = acc
+    xn = np.empty(A.shape[0])
+    for t in range(U.shape[0]):
+        _affine(C, x, D, U[t], Y[t])
+        _affine(A, x, B, U[t], xn)
         x[:] = xn
     return Y, x
 
