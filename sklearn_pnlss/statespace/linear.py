@@ -16,7 +16,9 @@ __all__ = [
 
 @numba.njit(cache=True, nogil=True, inline="always")
 def _affine(M, x, N, u, out):
-    """out = M x + N u, written out."""
+    """out = M x + N u, written out.  Not imported from the PNLSS kernels'
+    three-term ``_affine``: numba's on-disk cache checks only the cached
+    function's own source file (see :mod:`._decoupled_kernels`)."""
     for i in range(M.shape[0]):
         acc = 0.0
         for j in range(x.shape[0]):
