@@ -68,6 +68,23 @@ def test_random_init_from_the_linear_model_recovers_the_system():
     assert -model.score(X_val, y_val) < min(20 * np.log10(y_val.std()) - 60, linear_db - 40)
 
 
+def test_random_start_of_high_degree_branches_is_a_float_model():
+    """From degree 21 on, the factorials that scale the random coefficients
+    overflow int64; the start must still be a float model the compiled
+    kernels simulate (it was an object array, refused by numba)."""
+    from sklearn_pnlss.decoupling.start import random_branches_start
+
+    truth = _truth()
+    s = np.random.default_rng(0).standard_normal((100, 3))
+    model = random_branches_start(truth, s, n_branches=2, degree=25, random_state=0)
+    assert model.G.dtype == np.float64 and np.all(np.isfinite(model.G))
+    X, _ = _data(n_realizations=1)
+    linear = truth.with_theta(truth.theta)
+    linear.Wx[:] = 0.0
+    # W = 0: the start simulates as the linear model does
+    np.testing.assert_allclose(model.simulate_signal(X[0], period=N), linear.simulate_signal(X[0], period=N))
+
+
 def test_random_init_refuses_a_pnlss_stage():
     X, y = _data()
     full = PNLSSRegressor(2, degrees=(2, 3), period=N, max_iter=2).fit(X, y)

@@ -195,7 +195,9 @@ def random_branches_start(linear_model, states_inputs, n_branches, degree, *, ra
     rms = np.sqrt(np.mean((states_inputs @ V) ** 2, axis=0))
     V /= np.where(rms > 0, rms, 1.0)
     powers = np.arange(1, degree + 1)
-    G = rng.standard_normal((n_branches, degree)) / np.array([math.factorial(k) for k in powers])
+    # float factorials: from degree 21 on, integer ones overflow int64 and
+    # would give an object array that the compiled kernels cannot take
+    G = rng.standard_normal((n_branches, degree)) / np.array([float(math.factorial(k)) for k in powers])
     G[:, 0] = 0.0
     return DecoupledModel(
         A=A.copy(), B=B.copy(), C=C.copy(), D=D.copy(), Wx=np.zeros((n, n_branches)),
