@@ -96,7 +96,9 @@ SETUPS = {
 
 def models(name):
     """The library's models for one benchmark: (label, settings, factory)
-    pairs; each factory returns an unfitted estimator (or Pipeline)."""
+    tuples, each factory returning an unfitted estimator (or Pipeline); a
+    fourth item, when present, is the context the row is fitted and
+    simulated in (one BLAS thread)."""
     from sklearn.pipeline import make_pipeline
 
     from sklearn_pnlss import BLAEstimator, DecoupledPNLSSRegressor, IntegratedOutputRegressor, PNLSSRegressor
