@@ -32,9 +32,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 import gap_withheld as gw  # noqa: E402
-from _bench_utils import header, write_results  # noqa: E402
-
-RESULTS = Path(__file__).parent / "results" / "black_box.json"
+from _bench_utils import RESULTS, header, write_results  # noqa: E402
 
 #: Family e's single effects (their second seed) and two of family t's pairs.
 CASES = [("e", "hysteresis", None, 1), ("e", "cubic_stiffness", None, 1), ("e", "second_mode", None, 1),
@@ -85,7 +83,7 @@ def main():
         rows = [run_case(*case) for case in CASES]
     results = header()
     results["rows"] = rows
-    write_results(results, RESULTS)
+    write_results(results, RESULTS / "black_box.json")
 
 
 if __name__ == "__main__":

@@ -121,21 +121,18 @@ def models(name):
         rows.append(("Decoupled PNLSS from the BLA", {"n_states": n, "offsets": offsets, **dec},
                      lambda: make_pipeline(BLAEstimator(n, fs=fs, offsets=offsets), DecoupledPNLSSRegressor(n, **dec))))
     if "integrated" in setup:
-        inc = setup["integrated"]
-        rows += [
-            ("BLA of the increments, summed", {"n_states": n, "offsets": offsets, "integrated": True},
-             lambda: IntegratedOutputRegressor(BLAEstimator(n, fs=fs, offsets=offsets))),
-            ("PNLSS of the increments, summed", {"n_states": n, "offsets": offsets, "integrated": True, **inc},
-             lambda: IntegratedOutputRegressor(make_pipeline(BLAEstimator(n, fs=fs, offsets=offsets),
-                                                             PNLSSRegressor(n, **inc)))),
-        ]
+        inc, label = setup["integrated"], "PNLSS of the increments, summed"
+        rows.append(("BLA of the increments, summed", {"n_states": n, "offsets": offsets, "integrated": True},
+                     lambda: IntegratedOutputRegressor(BLAEstimator(n, fs=fs, offsets=offsets))))
+        # the model, then its spread: other iteration counts, one BLAS thread
         spread = setup.get("integrated_spread", {})
-        variants = {f"PNLSS of the increments, summed: {k} iterations": ({**inc, "max_iter": k}, nullcontext)
-                    for k in spread.get("iterations", ())}
+        fits = {label: (inc, nullcontext)}
+        fits.update({f"{label}: {k} iterations": ({**inc, "max_iter": k}, nullcontext)
+                     for k in spread.get("iterations", ())})
         if spread.get("one_thread"):
-            variants["PNLSS of the increments, summed: one BLAS thread"] = (inc, lambda: threadpool_limits(1))
-        for label, (settings, context) in variants.items():
-            rows.append((label, {"n_states": n, "offsets": offsets, "integrated": True, **settings},
+            fits[f"{label}: one BLAS thread"] = (inc, lambda: threadpool_limits(1))
+        for row_label, (settings, context) in fits.items():
+            rows.append((row_label, {"n_states": n, "offsets": offsets, "integrated": True, **settings},
                          lambda settings=settings: IntegratedOutputRegressor(
                              make_pipeline(BLAEstimator(n, fs=fs, offsets=offsets), PNLSSRegressor(n, **settings))),
                          context))

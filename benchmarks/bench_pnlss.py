@@ -236,6 +236,12 @@ def _peer(pyvib_path, pyvib_python, data_dir, iterations):
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
+def _store(results, section, value):
+    """A section measured by this run, with the run's date (the sections
+    not rerun keep theirs)."""
+    results[section], results[f"{section}_date"] = value, results["date"]
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--data-dir", default=str(DEFAULT_DATA))
@@ -258,7 +264,7 @@ def main(argv=None):
             results[f"{section}_date"] = previous.get(f"{section}_date", previous.get("date"))
     if args.accuracy_only:
         print("accuracy (converged fits, official test sets)")
-        results["accuracy"], results["accuracy_date"] = _accuracy(args.data_dir), results["date"]
+        _store(results, "accuracy", _accuracy(args.data_dir))
         write_results(results, args.output)
         return
 
@@ -266,11 +272,11 @@ def main(argv=None):
     with tempfile.TemporaryDirectory() as empty_cache:
         cold = first_call(_FIRST_CALL, empty_cache)
     warm = first_call(_FIRST_CALL)
-    results["compile"], results["compile_date"] = {"cold_cache": cold, "warm_cache": warm}, results["date"]
+    _store(results, "compile", {"cold_cache": cold, "warm_cache": warm})
     print(f"  cold cache: compile {cold['compile_or_load']:.2f} s;  warm cache: load {warm['compile_or_load']:.2f} s")
 
     print(f"timed fits ({args.iterations} LM iterations, median of {args.repeat})")
-    results["speed"], results["speed_date"] = _speed(args.data_dir, args.iterations, args.repeat), results["date"]
+    _store(results, "speed", _speed(args.data_dir, args.iterations, args.repeat))
 
     if args.pyvib_path:
         print(f"peer: pyvib from {args.pyvib_path}, one thread, {args.iterations} iterations")
@@ -282,7 +288,7 @@ def main(argv=None):
             "lm_iteration": peer["t_per_iter_s"] / ours["t_per_iter_s"],
             "fit_end_to_end": peer["t_total_s"] / ours["t_fit_s"],
         }
-        results["peer"], results["peer_date"] = {"pyvib": peer, "speedup": ratios}, results["date"]
+        _store(results, "peer", {"pyvib": peer, "speedup": ratios})
         print(f"  pyvib: jacobian {peer['t_jacobian_s']:.2f} s, iteration {peer['t_per_iter_s']:.2f} s, "
               f"fit {peer['t_total_s']:.1f} s ({peer['n_iter']} it); "
               f"test {peer['db_multisine']:.2f} / {peer['db_sweep']:.2f} dB")
@@ -291,7 +297,7 @@ def main(argv=None):
 
     if args.accuracy:
         print("accuracy (converged fits, official test sets)")
-        results["accuracy"], results["accuracy_date"] = _accuracy(args.data_dir), results["date"]
+        _store(results, "accuracy", _accuracy(args.data_dir))
     write_results(results, args.output)
 
 

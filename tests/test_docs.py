@@ -498,16 +498,16 @@ TANKS_PNLSS = ("cascaded_tanks", "PNLSS")
 EMPS_BLA = ("emps", "BLA of the increments, summed")
 EMPS_PNLSS = ("emps", "PNLSS of the increments, summed")
 WH_DECOUPLED = ("wh2009", "Decoupled PNLSS from the BLA")
+LM_SCHEDULE = "bench_lm_schedule.py: lm_schedule.json"
+
+FAM_S = "gap_structures.py (gap_withheld.py --family s): gap_withheld_family_s.json"
+F16_GAP = "bench_f16_gap.py: f16_gap.json"
 
 
 def _emps_spread():
     """The EMPS model of the increments refitted with other iteration counts
     and one BLAS thread (bench_field.py's spread rows), in their order."""
     return [r for r in _results("field")["benchmarks"]["emps"]["rows"] if r["model"].startswith(EMPS_PNLSS[1] + ":")]
-LM_SCHEDULE = "bench_lm_schedule.py: lm_schedule.json"
-
-FAM_S = "gap_structures.py (gap_withheld.py --family s): gap_withheld_family_s.json"
-F16_GAP = "bench_f16_gap.py: f16_gap.json"
 
 
 def _family_s(nominal=None):
