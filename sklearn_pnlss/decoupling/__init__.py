@@ -9,7 +9,8 @@ The start of the decoupled model ``f(s) ~ W g(V^T s)``, in four steps:
 3. :func:`decompose_jacobian` computes its rank-``r`` CPD ``[[W, V, H]]``
    (:func:`rank_scan` helps choose ``r``);
 4. :func:`fit_branches` turns ``H`` into polynomial branches ``g_l`` of
-   degrees 2..d (coefficients of shape (r, d), one per degree 1..d); :func:`decoupled_map` evaluates the result.
+   degrees 2..d (coefficients of shape (r, d), one per degree 1..d); :func:`decoupled_map` evaluates the result;
+   :func:`splines_from_polynomials` turns them into spline branches.
 
 Internal: not part of the API; may change without notice (the estimators in
 :mod:`sklearn_pnlss` are the way in).
@@ -19,6 +20,7 @@ from .branches import (
     decoupled_map,
     evaluate_branches,
     fit_branches,
+    splines_from_polynomials,
 )
 from .cpd import CPDResult, RankScan, decompose_jacobian, rank_scan
 from .jacobian_tensor import polynomial_jacobian, polynomial_map, sample_points
@@ -35,4 +37,5 @@ __all__ = [
     "polynomial_map",
     "rank_scan",
     "sample_points",
+    "splines_from_polynomials",
 ]

@@ -21,11 +21,14 @@ import numbers
 import numpy as np
 from sklearn.utils.validation import check_array
 
+from ..statespace.splines import cubic_bspline_basis, spline_knots
+
 __all__ = [
     "branch_derivatives",
     "decoupled_map",
     "evaluate_branches",
     "fit_branches",
+    "splines_from_polynomials",
 ]
 
 
@@ -129,6 +132,51 @@ def fit_branches(V, H, points, degree):
     return coef
 
 
+def splines_from_polynomials(coef, Z, n_basis, margin=0.1):
+    """Spline branches that follow polynomial branches over their inputs.
+
+    Each branch gets knots spanning its inputs ``Z[:, l]`` (widened by
+    ``margin`` of their range on each side) and the spline coefficients
+    that fit its polynomial best, by least squares on a fine grid over the
+    knots: how a start made for polynomials (a CPD, random branches) starts
+    spline branches.
+
+    Parameters
+    ----------
+    coef : array-like of shape (r, degree)
+        Polynomial branches (see :func:`fit_branches`).
+    Z : array-like of shape (N, r)
+        Branch inputs the splines must cover.
+    n_basis : int
+        Coefficients per spline, at least 4.
+    margin : float, default=0.1
+
+    Returns
+    -------
+    spline_coef : ndarray of shape (r, n_basis)
+    knots : ndarray of shape (r, 2)
+        ``[first knot, spacing]`` of each branch.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> z = np.linspace(-1.0, 1.0, 101)[:, None]
+    >>> c, knots = splines_from_polynomials([[0.0, 1.0, 1.0]], z, 6)  # z**2 + z**3: a cubic, exact
+    >>> float(np.abs(evaluate_branches(c, z, knots=knots) - (z**2 + z**3)).max()) < 1e-12
+    True
+    """
+    coef = _check_coef(coef)
+    Z = _check_Z(coef, Z)
+    knots = np.vstack([spline_knots(z, n_basis, margin) for z in Z.T])
+    spline_coef = np.empty((coef.shape[0], n_basis))
+    for l, k in enumerate(knots):
+        grid = np.linspace(k[0], k[0] + (n_basis - 3) * k[1], 10 * n_basis)
+        basis = cubic_bspline_basis(grid, k, n_basis)[0] - cubic_bspline_basis(0.0, k, n_basis)[0]
+        target = evaluate_branches(coef[l : l + 1], grid[:, None])[:, 0]
+        spline_coef[l] = np.linalg.lstsq(basis, target, rcond=None)[0]
+    return spline_coef, knots
+
+
 def _held(coef, Z, bounds):
     """``coef`` and ``Z`` checked, and ``Z`` held inside ``bounds`` (r, 2)."""
     coef = _check_coef(coef)
@@ -141,14 +189,25 @@ def _held(coef, Z, bounds):
     return coef, Z, np.clip(Z, bounds[:, 0], bounds[:, 1])
 
 
-def _polynomial(coef, Z):
-    """g and g' of the plain polynomials at Z (N, r)."""
+def _branch_functions(coef, Z, knots):
+    """g and g' of the plain polynomials (``knots`` None) or splines at Z
+    (N, r)."""
+    if knots is not None:
+        knots = np.asarray(knots, dtype=np.float64)
+        if knots.shape != (coef.shape[0], 2):
+            raise ValueError(f"knots must have shape (r, 2) = ({coef.shape[0]}, 2); got {knots.shape}.")
+        g, dg = np.empty_like(Z), np.empty_like(Z)
+        for l, (c, k) in enumerate(zip(coef, knots)):
+            B, dB = cubic_bspline_basis(Z[:, l], k, c.size)
+            g[:, l] = (B - cubic_bspline_basis(0.0, k, c.size)[0]) @ c
+            dg[:, l] = dB @ c
+        return g, dg
     powers = Z[:, :, None] ** np.arange(coef.shape[1])  # z**k, k = 0..d-1
     k1 = np.arange(1, coef.shape[1] + 1)
     return np.einsum("nlk,lk->nl", powers * Z[:, :, None], coef), np.einsum("nlk,lk->nl", powers, coef * k1)
 
 
-def evaluate_branches(coef, Z, bounds=None, linear_extrapolation=False):
+def evaluate_branches(coef, Z, bounds=None, linear_extrapolation=False, knots=None):
     """Values of the branches, ``G[k, l] = g_l(Z[k, l])``, as the decoupled
     model evaluates them.
 
@@ -163,6 +222,10 @@ def evaluate_branches(coef, Z, bounds=None, linear_extrapolation=False):
         edge value, or, with ``linear_extrapolation``, follows its edge
         tangent. None: the plain polynomials.
     linear_extrapolation : bool, default=False
+    knots : array-like of shape (r, 2) or None, default=None
+        Spline branches: ``[first knot, spacing]`` of each, ``coef[l, k]``
+        multiplying ``B_k(z) - B_k(0)`` (see
+        :mod:`sklearn_pnlss.statespace.splines`); None: polynomials.
 
     Returns
     -------
@@ -178,18 +241,18 @@ def evaluate_branches(coef, Z, bounds=None, linear_extrapolation=False):
     [[28.0]]
     """
     coef, Z, Zc = _held(coef, Z, bounds)
-    g, dg = _polynomial(coef, Zc)
+    g, dg = _branch_functions(coef, Zc, knots)
     return g + dg * (Z - Zc) if linear_extrapolation else g
 
 
-def branch_derivatives(coef, Z, bounds=None, linear_extrapolation=False):
+def branch_derivatives(coef, Z, bounds=None, linear_extrapolation=False, knots=None):
     """Derivatives of the branches, ``G'[k, l] = g_l'(Z[k, l])``, as the
     decoupled model evaluates them (zero where a branch is held, the edge
     slope where it follows its tangent).
 
     Parameters
     ----------
-    coef, Z, bounds, linear_extrapolation
+    coef, Z, bounds, linear_extrapolation, knots
         As in :func:`evaluate_branches`.
 
     Returns
@@ -202,7 +265,7 @@ def branch_derivatives(coef, Z, bounds=None, linear_extrapolation=False):
     [[16.0]]
     """
     coef, Z, Zc = _held(coef, Z, bounds)
-    dg = _polynomial(coef, Zc)[1]
+    dg = _branch_functions(coef, Zc, knots)[1]
     return dg if linear_extrapolation else np.where(Z == Zc, dg, 0.0)
 
 

@@ -23,7 +23,7 @@ from sklearn.utils import check_random_state
 from sklearn.utils.validation import check_array
 
 from ..statespace.decoupled import DecoupledModel
-from .branches import fit_branches
+from .branches import fit_branches, splines_from_polynomials
 from .cpd import decompose_jacobian
 from .jacobian_tensor import polynomial_jacobian, sample_points
 
@@ -66,7 +66,8 @@ def nonlinear_jacobian_tensor(pnlss_model, points):
     return _jacobian_tensor(E, exE, F, exF, np.asarray(points, dtype=np.float64))
 
 
-def decoupled_start(pnlss_model, states_inputs, n_branches, degree, *, n_points=500, random_state=None):
+def decoupled_start(pnlss_model, states_inputs, n_branches, degree, *, n_points=500, n_knots=None,
+                    random_state=None):
     """Decoupled model that approximates a PNLSS model's polynomial.
 
     Parameters
@@ -83,6 +84,10 @@ def decoupled_start(pnlss_model, states_inputs, n_branches, degree, *, n_points=
         Degree ``d >= 2`` of the branches.
     n_points : int, default=500
         Number of sampling points.
+    n_knots : int or None, default=None
+        Spline branches with this many knots (``n_knots + 2``
+        coefficients), fitted to the polynomial branches over the sampled
+        points; None: the polynomial branches.
     random_state : int, RandomState, Generator or None, default=None
         Controls the sampling points and the random start of the CPD.
 
@@ -135,6 +140,9 @@ def decoupled_start(pnlss_model, states_inputs, n_branches, degree, *, n_points=
     J = _jacobian_tensor(E, exE, F, exF, points)
     W, V, H, cpd_error = decompose_jacobian(J, n_branches, random_state=rng)
     G = fit_branches(V, H, points, degree)
+    knots = None
+    if n_knots is not None:
+        G, knots = splines_from_polynomials(G, points @ V, n_knots + 2)
     model = DecoupledModel(
         A=pnlss_model.A + Ex_lin,
         B=pnlss_model.B + Eu_lin,
@@ -145,11 +153,12 @@ def decoupled_start(pnlss_model, states_inputs, n_branches, degree, *, n_points=
         V=np.ascontiguousarray(V),
         G=G,
         output_branches=output_branches,
+        knots=knots,
     )
     return model, cpd_error
 
 
-def random_branches_start(linear_model, states_inputs, n_branches, degree, *, random_state=None):
+def random_branches_start(linear_model, states_inputs, n_branches, degree, *, n_knots=None, random_state=None):
     """Decoupled model that equals a linear model, with random branches ready
     to grow.
 
@@ -170,6 +179,15 @@ def random_branches_start(linear_model, states_inputs, n_branches, degree, *, ra
     n_branches : int
     degree : int
         ``d >= 2``.
+    n_knots : int or None, default=None
+        Spline branches with this many knots (``n_knots + 2``
+        coefficients) spanning the branch inputs along ``states_inputs``,
+        fitted to random cubics (``degree`` is then not used): random
+        polynomials of a high degree are steep at the edges of the range,
+        and splines started there stay on the linear model's plateau
+        (measured on a simulated Wiener-Hammerstein system with a knee:
+        a start from degree 9 ended at 29 dB after 100 iterations, from
+        degree 3 at -8 dB after 31). None: polynomial branches.
     random_state : int, RandomState, Generator or None, default=None
         Controls the directions and the branches' coefficients.
 
@@ -194,12 +212,17 @@ def random_branches_start(linear_model, states_inputs, n_branches, degree, *, ra
     V = rng.standard_normal((n + m, n_branches))
     rms = np.sqrt(np.mean((states_inputs @ V) ** 2, axis=0))
     V /= np.where(rms > 0, rms, 1.0)
+    if n_knots is not None:
+        degree = 3
     powers = np.arange(1, degree + 1)
     # float factorials: from degree 21 on, integer ones overflow int64 and
     # would give an object array that the compiled kernels cannot take
     G = rng.standard_normal((n_branches, degree)) / np.array([float(math.factorial(k)) for k in powers])
     G[:, 0] = 0.0
+    knots = None
+    if n_knots is not None:
+        G, knots = splines_from_polynomials(G, states_inputs @ V, n_knots + 2)
     return DecoupledModel(
         A=A.copy(), B=B.copy(), C=C.copy(), D=D.copy(), Wx=np.zeros((n, n_branches)),
-        Wy=np.zeros((p, n_branches)), V=np.ascontiguousarray(V), G=G,
+        Wy=np.zeros((p, n_branches)), V=np.ascontiguousarray(V), G=G, knots=knots,
     )

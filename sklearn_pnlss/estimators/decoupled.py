@@ -29,8 +29,9 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
 
     ``x(t+1) = A x + B u + W_x g(V^T [x; u])``,
     ``y = C x + D u + W_y g(V^T [x; u])`` (output branches optional), where
-    each ``g_l`` is a univariate polynomial of degree ``degree``. It needs
-    ``(2 n + d + 1) r`` nonlinear parameters (state equation) where the full
+    each ``g_l`` is a univariate polynomial of degree ``degree``, or a cubic
+    spline (``n_knots``). It needs ``(2 n + d + 1) r`` nonlinear parameters
+    (state equation, ``d`` coefficients per branch) where the full
     polynomial needs them combinatorially many.
 
     Fitting, ``init="cpd"`` (Fakhrizadeh Esfahani et al., MSSP 2018): a full
@@ -60,7 +61,17 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
     degree : int, default=10
         Degree ``d`` of each branch (terms of degrees 1 to ``d``; the linear
         term is redundant with A and B and kept only to count parameters as
-        the paper does).
+        the paper does). With ``n_knots``, the degree of the polynomial
+        branches the CPD start fits before it turns them into splines (the
+        random start draws cubics).
+    n_knots : int or None, default=None
+        Cubic spline branches on this many evenly spaced knots
+        (``n_knots + 2`` coefficients each) instead of polynomials. The
+        knots span each branch input's range along the start model's
+        simulation, widened by a tenth on each side; beyond them a branch
+        follows its edge tangent. For a nonlinearity with a knee (a diode, a
+        saturation), which a polynomial follows only at a high degree and
+        with ripple. Measured on WH2009 (``benchmarks/bench_field.py``).
     period : int or None, default=None
         Samples per period; None: the period of the Pipeline stage this
         model starts from, if any (see :class:`PNLSSRegressor`).
@@ -122,8 +133,12 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
     W_x_ : ndarray of shape (n_states, n_branches)
     W_y_ : ndarray of shape (n_outputs, n_branches)
         Zero without output branches.
-    coef_ : ndarray of shape (n_branches, degree)
-        ``coef_[l, k]`` multiplies ``z_l ** (k + 1)`` in ``g_l``.
+    coef_ : ndarray of shape (n_branches, degree) or (n_branches, n_knots + 2)
+        ``coef_[l, k]`` multiplies ``z_l ** (k + 1)`` in ``g_l``; for spline
+        branches, the ``k``-th cubic B-spline less its value at 0.
+    branch_knots_ : ndarray of shape (n_branches, n_knots) or None
+        The knots of each spline branch, in the units of ``z``; None for
+        polynomial branches.
     z_range_ : ndarray of shape (n_branches, 2)
         Range of each branch input ``z_l = V_[:, l] @ [x; u]`` on the
         training data (where the branches are trustworthy).
@@ -158,6 +173,7 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         "n_states": [Interval(Integral, 1, None, closed="left")],
         "n_branches": [Interval(Integral, 1, None, closed="left")],
         "degree": [Interval(Integral, 2, None, closed="left")],
+        "n_knots": [Interval(Integral, 2, None, closed="left"), None],
         "init": [Options(str, {"cpd", "random"})],
         "n_init": [Interval(Integral, 1, None, closed="left")],
         "n_points": [Interval(Integral, 2, None, closed="left")],
@@ -173,6 +189,7 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         *,
         n_branches=3,
         degree=10,
+        n_knots=None,
         period=None,
         init="cpd",
         n_init=5,
@@ -194,6 +211,7 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         self.n_states = n_states
         self.n_branches = n_branches
         self.degree = degree
+        self.n_knots = n_knots
         self.period = period
         self.init = init
         self.n_init = n_init
@@ -306,11 +324,12 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
     def _one_start(self, full, trajectory, seed, objectives, settings, val):
         if self.init == "random":
             model = random_branches_start(full.normalised, trajectory, self.n_branches, self.degree,
-                                          random_state=seed)
+                                          n_knots=self.n_knots, random_state=seed)
             model.output_branches = bool(self.output_branches)
             return optimise(full.with_normalised(model), objectives, settings, val), np.nan
         model, cpd_error = decoupled_start(
-            full.normalised, trajectory, self.n_branches, self.degree, n_points=self.n_points, random_state=seed,
+            full.normalised, trajectory, self.n_branches, self.degree, n_points=self.n_points,
+            n_knots=self.n_knots, random_state=seed,
         )
         model = model.with_theta(model.theta)  # a private copy
         model.output_branches = bool(self.output_branches)
@@ -329,6 +348,8 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         user = super()._export(X_list)
         self.V_, self.W_x_, self.W_y_ = user.V, user.Wx, user.Wy
         self.coef_ = user.G
+        self.branch_knots_ = None if user.knots is None else (
+            user.knots[:, :1] + np.arange(user.G.shape[1] - 2) * user.knots[:, 1:])
         # The branch inputs' range along the fitted model's own simulation
         # (after LM its state basis is no longer the start's).
         z = self._trajectory(self.model_, X_list, "fitted decoupled model") @ self.model_.normalised.V
@@ -339,7 +360,8 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
     def _summary_structure(self):
         return {
             "branches": int(self.coef_.shape[0]),
-            "degree": int(self.coef_.shape[1]),
+            **({"knots": int(self.branch_knots_.shape[1])} if self.branch_knots_ is not None
+               else {"degree": int(self.coef_.shape[1])}),
             "output_branches": bool(self.output_branches),
             "branch_input_ranges": [f"[{lo:.3g}, {hi:.3g}]" for lo, hi in self.z_range_],
         }
@@ -406,4 +428,4 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         if z.ndim == 1:
             z = np.repeat(z[:, None], self.coef_.shape[0], axis=1)
         model = self.model_.normalised
-        return z, evaluate_branches(self.coef_, z, model.bounds, model.linear_extrapolation)
+        return z, evaluate_branches(self.coef_, z, model.bounds, model.linear_extrapolation, model.knots)

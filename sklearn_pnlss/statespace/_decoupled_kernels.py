@@ -42,30 +42,76 @@ def _stack(x, u, s):
 
 
 @_jit
-def _branches(V, G, lo, hi, linear, s, zp, g, dg):
+def _polynomial_at(G, b, zc, zp, dzp):
+    """g_b(zc), g_b'(zc); zp[b, k] = z**(k+1), dzp[k] its z-derivative."""
+    val = 0.0
+    der = 0.0
+    zk = 1.0  # zc ** k
+    for k in range(G.shape[1]):
+        der += (k + 1) * G[b, k] * zk
+        dzp[k] = (k + 1) * zk
+        zk *= zc
+        zp[b, k] = zk
+        val += G[b, k] * zk
+    return val, der
+
+
+@_jit
+def _spline_at(G, b, knots, B0, zc, zp, dzp):
+    """The spline branch g_b(zc) = sum_k G[b, k] (B_k(zc) - B_k(0)), uniform
+    cubic B-splines B_k with first knot knots[b, 0] and spacing knots[b, 1],
+    continued along its edge tangent outside its knots; its derivative, and
+    zp[b, k] = B_k(zc) - B_k(0), dzp[k] = B_k'(zc). Only four B_k are
+    non-zero at a point: the cost of a branch does not grow with its
+    knots."""
+    d = G.shape[1]
+    h = knots[b, 1]
+    n_int = d - 3
+    te = min(max((zc - knots[b, 0]) / h, 0.0), float(n_int))  # in knot spacings, inside the knots
+    i = min(int(te), n_int - 1)
+    u = te - i
+    dz = zc - (knots[b, 0] + te * h)  # beyond the knots: the tangent's run
+    for k in range(d):
+        zp[b, k] = -B0[b, k]
+        dzp[k] = 0.0
+    v = 1.0 - u
+    w0, w1, w2, w3 = v * v * v / 6, (3 * u * u * u - 6 * u * u + 4) / 6, (-3 * u * u * u + 3 * u * u + 3 * u + 1) / 6, u * u * u / 6
+    d0, d1, d2, d3 = -v * v / (2 * h), (3 * u * u - 4 * u) / (2 * h), (-3 * u * u + 2 * u + 1) / (2 * h), u * u / (2 * h)
+    zp[b, i] += w0 + d0 * dz
+    zp[b, i + 1] += w1 + d1 * dz
+    zp[b, i + 2] += w2 + d2 * dz
+    zp[b, i + 3] += w3 + d3 * dz
+    dzp[i], dzp[i + 1], dzp[i + 2], dzp[i + 3] = d0, d1, d2, d3
+    val = 0.0
+    for k in range(d):
+        val += G[b, k] * zp[b, k]
+    der = G[b, i] * d0 + G[b, i + 1] * d1 + G[b, i + 2] * d2 + G[b, i + 3] * d3
+    return val, der
+
+
+@_jit
+def _branches(V, G, lo, hi, linear, spline, knots, B0, s, zp, dzp, g, dg):
     """Branch values ``g``, their derivatives ``dg`` with respect to the
     branch input, and ``zp[b, k]``, the derivative of ``g_b`` with respect to
-    ``G[b, k]``, at ``z = V^T s`` (continued outside ``[lo, hi]``)."""
+    ``G[b, k]``, at ``z = V^T s`` (continued outside ``[lo, hi]``);
+    polynomial branches, or splines (``spline``) on ``knots`` (r, 2)
+    with offsets ``B0`` (r, d). ``dzp`` (d,) is scratch."""
     r, d = G.shape
     for b in range(r):
         z = 0.0
         for j in range(s.shape[0]):
             z += V[j, b] * s[j]
-        zc = min(max(z, lo[b]), hi[b])  # the point the polynomial is evaluated at
-        val = 0.0
-        der = 0.0
-        zk = 1.0  # zc ** k
-        for k in range(d):
-            der += (k + 1) * G[b, k] * zk
-            zp[b, k] = zk * zc
-            if zc != z and linear:
-                # Tangent continuation: g(zc) + g'(zc) (z - zc).
-                zp[b, k] += (k + 1) * zk * (z - zc)
-            zk *= zc
-            val += G[b, k] * zk
+        zc = min(max(z, lo[b]), hi[b])  # the point the branch is evaluated at
+        if spline:
+            val, der = _spline_at(G, b, knots, B0, zc, zp, dzp)
+        else:
+            val, der = _polynomial_at(G, b, zc, zp, dzp)
         if zc != z:
             if linear:
+                # Tangent continuation: g(zc) + g'(zc) (z - zc).
                 val += der * (z - zc)
+                for k in range(d):
+                    zp[b, k] += dzp[k] * (z - zc)
             else:
                 der = 0.0  # held at the edge: no dependence on z
         g[b] = val
@@ -114,7 +160,7 @@ def _branch_direct(w, dg, s, zp, oV, oG, row):
 
 
 @numba.njit(cache=True, nogil=True)
-def decoupled_simulate(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, U, x0):
+def decoupled_simulate(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, spline, knots, B0, U, x0):
     """Simulate; returns (Y, X, n_ok, x_end). n_ok < len(U) means the state
     left the range (divergence) after sample n_ok - 1."""
     N, m = U.shape
@@ -123,6 +169,7 @@ def decoupled_simulate(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, U, x0):
     r, d = G.shape
     s = np.empty(n + m)
     zp = np.empty((r, d))
+    dzp = np.empty(d)
     g = np.empty(r)
     dg = np.empty(r)
     Y = np.empty((N, p))
@@ -131,7 +178,7 @@ def decoupled_simulate(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, U, x0):
     x_next = np.empty(n)
     for t in range(N):
         _stack(x, U[t], s)
-        _branches(V, G, lo, hi, linear, s, zp, g, dg)
+        _branches(V, G, lo, hi, linear, spline, knots, B0, s, zp, dzp, g, dg)
         X[t] = x
         _affine(C, x, D, U[t], Wy, g, Y[t])
         _affine(A, x, B, U[t], Wx, g, x_next)
@@ -143,7 +190,8 @@ def decoupled_simulate(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, U, x0):
 
 
 @numba.njit(cache=True, nogil=True)
-def decoupled_jacobian(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, U, x, Sx, n_skip, out_branch_params, J):
+def decoupled_jacobian(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, spline, knots, B0, U, x, Sx, n_skip,
+                       out_branch_params, J):
     """Output sensitivities dy(t)/dtheta for t >= n_skip, written to
     J[(t - n_skip), :, :] (shape (N - n_skip, p, n_theta)). ``Wy`` is a
     parameter (the last block) only when ``out_branch_params``; otherwise it
@@ -165,6 +213,7 @@ def decoupled_jacobian(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, U, x, Sx, n_ski
     oWy = oD + p * m
     s = np.empty(n + m)
     zp = np.empty((r, d))
+    dzp = np.empty(d)
     g = np.empty(r)
     dg = np.empty(r)
     S = Sx.copy()  # dx/dtheta for the state-moving parameters
@@ -176,7 +225,7 @@ def decoupled_jacobian(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, U, x, Sx, n_ski
     for t in range(N):
         u = U[t]
         _stack(x_now, u, s)
-        _branches(V, G, lo, hi, linear, s, zp, g, dg)
+        _branches(V, G, lo, hi, linear, spline, knots, B0, s, zp, dzp, g, dg)
         _linearised(A, Wx, dg, V, Ax)
         if t >= n_skip:
             _linearised(C, Wy, dg, V, Cx)

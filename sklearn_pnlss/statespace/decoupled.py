@@ -6,6 +6,7 @@ from numpy.polynomial import legendre
 
 from ._decoupled_kernels import decoupled_jacobian, decoupled_simulate
 from .model_base import DivergenceError, Segment, StateSpaceModel, unbounded
+from .splines import cubic_bspline_basis
 
 __all__ = ["DecoupledModel", "Segment", "legendre_power_matrix"]
 
@@ -30,9 +31,11 @@ _STATE_BLOCKS = ("A", "B", "Wx", "V", "G")
 class DecoupledModel(StateSpaceModel):
     """x(t+1) = A x + B u + Wx g(V^T s), y = C x + D u + Wy g(V^T s), s = [x; u].
 
-    ``r`` univariate polynomial branches ``g_l(z) = sum_k G[l, k] z**(k+1)``
-    (degrees 1..d) of the projections ``z = V^T s`` replace the full
-    multivariate polynomial of a PNLSS model.
+    ``r`` univariate branches of the projections ``z = V^T s`` replace the
+    full multivariate polynomial of a PNLSS model: polynomials
+    ``g_l(z) = sum_k G[l, k] z**(k+1)`` (degrees 1..d), or, with ``knots``,
+    cubic splines ``g_l(z) = sum_k G[l, k] (B_k(z) - B_k(0))`` on uniform
+    knots (:mod:`.splines`).
 
     Parameters
     ----------
@@ -46,7 +49,7 @@ class DecoupledModel(StateSpaceModel):
     V : ndarray of shape (n + m, r)
         Branch directions over ``s = [x; u]``.
     G : ndarray of shape (r, d)
-        ``G[l, k]`` multiplies ``z_l ** (k + 1)``.
+        ``G[l, k]`` multiplies ``z_l ** (k + 1)`` (or ``B_k(z_l) - B_k(0)``).
     output_branches : bool, default=False
         Whether ``Wy`` is a parameter.
     bounds : ndarray of shape (r, 2) or None, default=None
@@ -57,6 +60,10 @@ class DecoupledModel(StateSpaceModel):
         Outside ``bounds``, continue each branch along its edge tangent
         instead of holding its edge value. Holding keeps ``g`` bounded, so a
         stable ``A`` gives a bounded state for every bounded input.
+    knots : ndarray of shape (r, 2) or None, default=None
+        ``[first knot, spacing]`` of each branch's spline (``d - 3`` equal
+        intervals; at least 4 coefficients), beyond which it follows its
+        edge tangent; None: polynomial branches.
 
     Notes
     -----
@@ -76,6 +83,7 @@ class DecoupledModel(StateSpaceModel):
     output_branches: bool = False
     bounds: np.ndarray | None = None
     linear_extrapolation: bool = False
+    knots: np.ndarray | None = None
 
     def __post_init__(self):
         # ``copy`` of the base copies every field with np.copy; keep the flags
@@ -85,6 +93,13 @@ class DecoupledModel(StateSpaceModel):
         n, m, p = self.A.shape[0], self.B.shape[1], self.C.shape[0]
         r, d = self.G.shape
         self.bounds = unbounded(r) if self.bounds is None else np.array(self.bounds, dtype=float)
+        if self.knots is not None:
+            self.knots = np.array(self.knots, dtype=float)
+            if self.knots.shape != (r, 2) or d < 4 or not np.all(self.knots[:, 1] > 0):
+                raise ValueError(
+                    f"Spline branches need knots of shape ({r}, 2) with positive spacings and at least "
+                    f"4 coefficients per branch; got knots of shape {self.knots.shape} and {d} coefficients."
+                )
         expected = {
             "A": (n, n), "B": (n, m), "C": (p, n), "D": (p, m),
             "Wx": (n, r), "Wy": (p, r), "V": (n + m, r), "G": (r, d), "bounds": (r, 2),
@@ -107,6 +122,11 @@ class DecoupledModel(StateSpaceModel):
         return self.G.shape[1]
 
     @property
+    def splines(self):
+        """Whether the branches are splines (else polynomials)."""
+        return self.knots is not None
+
+    @property
     def n_nonlinear_params(self):
         """Parameters of the branches: Wx, V and G, (2n + m + d) r, plus Wy
         when ``output_branches``."""
@@ -120,13 +140,16 @@ class DecoupledModel(StateSpaceModel):
         return {
             "Wx": np.diag(state_scale) @ self.Wx, "Wy": np.diag(output_scale) @ self.Wy,
             "V": S_i[:, None] * self.V, "G": self.G.copy(), "bounds": self.bounds.copy(),
+            "knots": None if self.knots is None else self.knots.copy(),
         }
 
     @property
     def n_null_directions(self):
         """n^2 for the state basis, and per branch: the scale shared by W
-        and g, the scale shared by V and g, and the linear term of g that A
-        and B absorb."""
+        and g, and the linear term of g that A and B absorb; for a
+        polynomial, the scale shared by V and g, for a spline (whose knots
+        do not scale with V), the constant that ``- B_k(0)`` cancels
+        (equal coefficients)."""
         return self.n_states**2 + 3 * self.n_branches
 
     def bounded_variables(self, states_inputs):
@@ -153,11 +176,17 @@ class DecoupledModel(StateSpaceModel):
         states_inputs : array-like of shape (n_points, n_states + n_inputs)
             Rows ``[x; u]`` along the simulation of the training signals.
 
+        Spline coefficients are stepped as they are (each acts on four
+        intervals only: they are well conditioned already).
+
         Returns
         -------
-        basis : ndarray of shape (n_params, n_params)
-            Maps step coordinates to a step of ``theta``.
+        basis : ndarray of shape (n_params, n_params) or None
+            Maps step coordinates to a step of ``theta`` (None: the
+            parameters themselves, for spline branches).
         """
+        if self.splines:
+            return None
         z = self.bounded_variables(np.asarray(states_inputs, dtype=float))
         reach = np.abs(z).max(axis=0)
         reach[~(reach > 0)] = 1.0
@@ -170,15 +199,24 @@ class DecoupledModel(StateSpaceModel):
             basis[i : i + d, i : i + d] = legendre_in_powers / c**powers
         return basis
 
-    def _run(self, U, x0):
+    def _branch_arguments(self):
+        """What the kernels take to evaluate the branches: the trusted
+        range, the continuation, and the splines' knots and offsets
+        ``B_k(0)`` (zeros for polynomials)."""
         lo, hi = self._bounds()
+        r, d = self.G.shape
+        if not self.splines:
+            return lo, hi, self.linear_extrapolation, False, np.zeros((r, 2)), np.zeros((r, d))
+        B0 = np.vstack([cubic_bspline_basis(0.0, k, d)[0] for k in self.knots])
+        return lo, hi, self.linear_extrapolation, True, self.knots, B0
+
+    def _run(self, U, x0):
         return decoupled_simulate(
-            self.A, self.B, self.C, self.D, self.Wx, self.Wy, self.V, self.G, lo, hi, self.linear_extrapolation, U, x0
+            self.A, self.B, self.C, self.D, self.Wx, self.Wy, self.V, self.G, *self._branch_arguments(), U, x0
         )
 
     def _sensitivity(self, U, x, Sx, n_skip, J):
-        lo, hi = self._bounds()
         decoupled_jacobian(
-            self.A, self.B, self.C, self.D, self.Wx, self.Wy, self.V, self.G, lo, hi, self.linear_extrapolation,
+            self.A, self.B, self.C, self.D, self.Wx, self.Wy, self.V, self.G, *self._branch_arguments(),
             U, x, Sx, n_skip, self.output_branches, J,
         )

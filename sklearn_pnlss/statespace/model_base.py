@@ -132,7 +132,8 @@ class StateSpaceModel:
         return replace(self, bounds=unbounded(self.bounds.shape[0]))
 
     def copy(self):
-        return replace(self, **{f.name: np.copy(getattr(self, f.name)) for f in fields(self)})
+        # None (an optional block left out) stays None
+        return replace(self, **{f.name: np.copy(v) for f in fields(self) if (v := getattr(self, f.name)) is not None})
 
     def simulate(self, U, x0=None):
         """Output and final state from ``x0`` (zero by default); raises
