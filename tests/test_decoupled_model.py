@@ -190,6 +190,25 @@ def test_start_recovers_an_exactly_decoupled_pnlss(output_branches, linear_in_E)
     assert np.abs(Y - Y_ref).max() < 1e-6 * np.abs(Y_ref).max()
 
 
+def test_spline_start_reproduces_the_cpd_branches():
+    """The CPD start with spline branches: cubic splines hold the cubic
+    branches exactly over their knots, so W g(V^T s) is the same map."""
+    rng = np.random.default_rng(5)
+    truth = _random_model(rng, n=3, m=1, p=1, r=2, d=3, linear_branch=False)
+    pnlss = _as_pnlss(truth, rng, linear_branch=False)
+    U = 0.5 * rng.standard_normal((2000, 1))
+    S = np.hstack([pnlss.simulate_states(U), U])
+    poly, _ = decoupled_start(pnlss, S, 2, 3, random_state=0)
+    spline, _ = decoupled_start(pnlss, S, 2, 3, n_knots=6, random_state=0)
+    assert spline.G.shape == (2, 8) and spline.knots.shape == (2, 2)
+    Z = S @ spline.V
+    inside = np.all((Z > spline.knots[:, 0]) & (Z < spline.knots[:, 0] + 5 * spline.knots[:, 1]), axis=1)
+    assert inside.mean() > 0.9
+    f_poly = evaluate_branches(poly.G, Z[inside]) @ poly.Wx.T
+    f_spline = evaluate_branches(spline.G, Z[inside], knots=spline.knots) @ spline.Wx.T
+    assert np.abs(f_spline - f_poly).max() < 1e-9 * np.abs(f_poly).max()
+
+
 def test_start_validates_its_inputs():
     rng = np.random.default_rng(6)
     truth = _random_model(rng, r=2, d=3, linear_branch=False)

@@ -1,7 +1,10 @@
 """Compiled time recursions of the decoupled polynomial state-space model.
 
-    z = V^T s,   s = [x; u],   g_l(z_l) = sum_k G[b, k] z_l ** (k + 1)
+    z = V^T s,   s = [x; u],   g_l(z_l) = sum_k G[l, k] z_l ** (k + 1)
     x(t+1) = A x + B u + Wx g(z),   y = C x + D u + Wy g(z)
+
+or, spline branches, g_l(z_l) = sum_k G[l, k] (B_k(z_l) - B_k(0)) with
+uniform cubic B-splines B_k (see :mod:`.splines`).
 
 Parameters are ordered theta = [A, B, Wx, V, G | C, D (, Wy)] (row-major
 blocks): the first group moves the state, the second only the output; ``Wy``
