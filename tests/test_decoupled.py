@@ -224,22 +224,3 @@ def test_z_range_is_that_of_the_fitted_model():
     user = np.vstack([fitted.states_inputs(U, N) for U in X])
     np.testing.assert_allclose(user[:, 2:], np.vstack(X), rtol=1e-12)
     np.testing.assert_allclose(user @ model.V_, z, rtol=1e-9, atol=1e-9)
-
-
-def test_screened_starts_fit_only_the_best_on():
-    """init_max_iter: every start gets a few iterations, the best alone is
-    fitted on to max_iter; its history runs on through both phases."""
-    X, y = _data()
-    X_val, y_val = _data(n_realizations=1, seed=5)
-    params = dict(n_branches=1, degree=3, period=N, init="random", n_init=4, max_iter=40, random_state=0)
-    screened = DecoupledPNLSSRegressor(2, init_max_iter=8, **params).fit(X, y)
-    assert screened.init_scores_.shape == (4,)
-    assert screened.n_iter_ > 8 and screened.cost_history_.size == screened.n_iter_ + 1
-    assert np.all(np.diff(screened.cost_history_) <= 0)  # one descent across the two phases
-    # the screening's best score is the kept start's cost at its 8th iteration
-    assert screened.init_scores_.min() == pytest.approx(10 * np.log10(screened.cost_history_[8]))
-    assert -screened.score(X_val, y_val) < 20 * np.log10(y_val.std()) - 60
-    # with validation signals, the kept iterate is the best on them over both phases
-    validated = DecoupledPNLSSRegressor(2, init_max_iter=8, **params).fit(X, y, X_val=X_val, y_val=y_val)
-    assert validated.validation_history_.size == validated.n_iter_ + 1
-    assert validated.best_iteration_ == int(np.argmin(validated.validation_history_))

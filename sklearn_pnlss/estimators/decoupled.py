@@ -1,7 +1,6 @@
 """DecoupledPNLSSRegressor: the PNLSS model with its multivariate polynomial
 replaced by a few univariate branches, started by a CPD of the polynomial's
 Jacobian tensor and fitted by Levenberg-Marquardt."""
-from dataclasses import replace
 from numbers import Integral
 
 import numpy as np
@@ -13,7 +12,7 @@ from sklearn.utils.validation import check_is_fitted
 from ..decoupling.branches import evaluate_branches
 from ..decoupling.start import decoupled_start, random_branches_start
 from ..inspection import lm_fit_figures
-from ..statespace.fitting import optimise, resume
+from ..statespace.fitting import optimise
 from ..statespace.model_base import DivergenceError
 from ..utils.handover import attach_stage
 from ..utils.parameters import Interval, Options
@@ -84,12 +83,6 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
     n_init : int, default=5
         Starts from different random sampling points and CPD starts
         (``init="cpd"``) or different random directions (``"random"``).
-    init_max_iter : int or None, default=None
-        Iterations every start gets before the best one alone is fitted on
-        to ``max_iter``; None: every start gets ``max_iter``. Random starts
-        that stay on the linear model's plateau show it within a few dozen
-        iterations (their cost tens of dB above the others'), so many
-        starts screened briefly cost less than a few fitted in full.
     n_points : int, default=500
         Points at which the Jacobian of the full polynomial is sampled.
     output_branches : bool, default=False
@@ -160,8 +153,7 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         Relative CPD error of each start (NaN with ``init="random"``).
     init_scores_ : ndarray of shape (n_init,)
         Validation rms error in dB (or training cost in dB) of each start
-        after fitting (after ``init_max_iter`` iterations, when set); the
-        lowest was kept (``best_init_``).
+        after fitting; the lowest was kept (``best_init_``).
     n_params_, n_nonlinear_params_, n_iter_, best_iteration_ : int
     cost_history_, validation_history_ : ndarray
         Of the kept start (see :class:`PNLSSRegressor`).
@@ -184,7 +176,6 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         "n_knots": [Interval(Integral, 2, None, closed="left"), None],
         "init": [Options(str, {"cpd", "random"})],
         "n_init": [Interval(Integral, 1, None, closed="left")],
-        "init_max_iter": [Interval(Integral, 1, None, closed="left"), None],
         "n_points": [Interval(Integral, 2, None, closed="left")],
         "output_branches": ["boolean"],
         "start_model": [None, PNLSSRegressor],
@@ -202,7 +193,6 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         period=None,
         init="cpd",
         n_init=5,
-        init_max_iter=None,
         n_points=500,
         output_branches=False,
         start_model=None,
@@ -225,7 +215,6 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         self.period = period
         self.init = init
         self.n_init = n_init
-        self.init_max_iter = init_max_iter
         self.n_points = n_points
         self.output_branches = output_branches
         self.start_model = start_model
@@ -260,23 +249,17 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         """``n_init`` decoupled starts drawn along the start model's
         simulation of ``X_list`` (CPDs of the full model's Jacobian tensor,
         or random branches on the linear model), fitted in parallel; the
-        best is kept (after ``init_max_iter`` iterations, then fitted on)."""
+        best is kept."""
         trajectory = self._trajectory(full, X_list, "start model")
         seeds = check_random_state(self.random_state).randint(np.iinfo(np.int32).max, size=self.n_init)
-        screened = self.init_max_iter is not None and self.init_max_iter < self.max_iter
-        start_settings = replace(settings, max_iter=self.init_max_iter) if screened else settings
         runs = Parallel(n_jobs=self.n_jobs, prefer="threads")(
-            delayed(self._one_start)(full, trajectory, int(seed), objectives, start_settings, val) for seed in seeds
+            delayed(self._one_start)(full, trajectory, int(seed), objectives, settings, val) for seed in seeds
         )
         fits, cpd_errors = zip(*runs)
         scores = np.array([
             f.validation_error if val is not None else 10 * np.log10(f.cost_history[-1]) for f in fits
         ])
         self.best_init_ = int(np.argmin(scores))
-        if screened:
-            fits = list(fits)
-            fits[self.best_init_] = resume(fits[self.best_init_], objectives, settings, val,
-                                           self.max_iter - fits[self.best_init_].n_iter)
         self.init_scores_ = scores
         self.cpd_errors_ = np.array(cpd_errors)
         return fits[self.best_init_]

@@ -29,8 +29,8 @@ from .objective import SimulationError
 from .segments import make_segments, transient_length
 
 __all__ = [
-    "AMPLIFIED_VALIDATION", "FitSettings", "LMFit", "iteration_listener", "optimise", "resume",
-    "simulation_objectives", "trusted_model",
+    "AMPLIFIED_VALIDATION", "FitSettings", "LMFit", "iteration_listener", "optimise", "simulation_objectives",
+    "trusted_model",
 ]
 
 # An iterate (or a start) that runs away (diverges, or leaves its trusted
@@ -288,28 +288,4 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
         cost_history=np.array([h[1] for h in result.history]),
         validation_history=np.array(val_history) if validation is not None else None,
         validation_error=best["err"] if validation is not None else np.nan,
-    )
-
-
-def resume(fit, objectives, settings, validation=None, max_iter=None):
-    """``fit`` (an :class:`LMFit` from :func:`optimise`) continued for
-    ``max_iter`` more iterations of its last objective: how a start chosen
-    after a few iterations is fitted on.
-
-    The continuation starts from the fitted model's plain nonlinearity (its
-    trusted range is that of the iterate, not a constraint); the histories
-    run on, and with validation the better of the two fits' kept iterates
-    is kept.
-    """
-    start = fit.model.with_normalised(fit.model.normalised.without_bounds())
-    more = optimise(start, objectives[-1:], settings, validation, max_iter)
-    first = validation is not None and fit.validation_error <= more.validation_error
-    return LMFit(
-        model=fit.model if first else more.model,
-        n_iter=fit.n_iter + more.n_iter,
-        best_iteration=fit.best_iteration if first else fit.n_iter + more.best_iteration,
-        cost_history=np.concatenate([fit.cost_history, more.cost_history[1:]]),
-        validation_history=None if validation is None else np.concatenate(
-            [fit.validation_history, more.validation_history[1:]]),
-        validation_error=min(fit.validation_error, more.validation_error) if validation is not None else np.nan,
     )
