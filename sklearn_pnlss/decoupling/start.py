@@ -182,12 +182,9 @@ def random_branches_start(linear_model, states_inputs, n_branches, degree, *, n_
     n_knots : int or None, default=None
         Spline branches with this many knots (``n_knots + 2``
         coefficients) spanning the branch inputs along ``states_inputs``,
-        fitted to random cubics (``degree`` is then not used): random
-        polynomials of a high degree are steep at the edges of the range,
-        and splines started there stay on the linear model's plateau
-        (measured on a simulated Wiener-Hammerstein system with a knee:
-        a start from degree 9 ended at 29 dB after 100 iterations, from
-        degree 3 at -8 dB after 31). None: polynomial branches.
+        fitted to the random polynomials of degree ``degree``: the same
+        functions as the polynomial start over the knots. None: the
+        polynomial branches.
     random_state : int, RandomState, Generator or None, default=None
         Controls the directions and the branches' coefficients.
 
@@ -212,8 +209,6 @@ def random_branches_start(linear_model, states_inputs, n_branches, degree, *, n_
     V = rng.standard_normal((n + m, n_branches))
     rms = np.sqrt(np.mean((states_inputs @ V) ** 2, axis=0))
     V /= np.where(rms > 0, rms, 1.0)
-    if n_knots is not None:
-        degree = 3
     powers = np.arange(1, degree + 1)
     # float factorials: from degree 21 on, integer ones overflow int64 and
     # would give an object array that the compiled kernels cannot take
