@@ -655,6 +655,8 @@ FIGURES = [
            lambda: [10]),
     Figure(GAP, "1 % at 60 Hz at 1 kHz", "the trapezoidal rule's period error (w h)^2 / 12",
            lambda: [100 * (2 * 3.141592653589793 * 60 / 1000) ** 2 / 12, 60, 1]),
+    Figure(DEC, "one branch of 10 knots stays below 1 % test error", "tests/test_spline_branches.py",
+           lambda: [None, 100 * 0.01 * _source_of("tests/test_spline_branches.py", "assert spline_error < 0.01")]),
     Figure(GAP, "more than 4 % off as integrated, is within 0.6 % prewarped", "tests/test_prewarp.py",
            lambda: [100 * 0.04 * _source_of("tests/test_prewarp.py", "assert plain > 0.04"),
                     100 * 0.006 * _source_of("tests/test_prewarp.py", "assert warped < 0.006")]),
