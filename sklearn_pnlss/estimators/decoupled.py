@@ -77,7 +77,9 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         simulation, widened by a tenth on each side; beyond them a branch
         follows its edge tangent. For a nonlinearity with a knee (a diode, a
         saturation), which a polynomial follows only at a high degree and
-        with ripple. Measured on WH2009 (``benchmarks/bench_field.py``).
+        with ripple. On WH2009 they have not yet done better than
+        polynomial branches of degree 21 (see the user guide's decoupling
+        page).
     period : int or None, default=None
         Samples per period; None: the period of the Pipeline stage this
         model starts from, if any (see :class:`PNLSSRegressor`).
