@@ -21,7 +21,7 @@ import numbers
 import numpy as np
 from sklearn.utils.validation import check_array
 
-from ..statespace.splines import cubic_bspline_basis, spline_knots
+from ..statespace.splines import branch_basis, spline_knots
 
 __all__ = [
     "branch_derivatives",
@@ -171,7 +171,7 @@ def splines_from_polynomials(coef, Z, n_basis, margin=0.1):
     spline_coef = np.empty((coef.shape[0], n_basis))
     for l, k in enumerate(knots):
         grid = np.linspace(k[0], k[0] + (n_basis - 3) * k[1], 10 * n_basis)
-        basis = cubic_bspline_basis(grid, k, n_basis)[0] - cubic_bspline_basis(0.0, k, n_basis)[0]
+        basis = branch_basis(grid, k, n_basis)[0]
         target = evaluate_branches(coef[l : l + 1], grid[:, None])[:, 0]
         spline_coef[l] = np.linalg.lstsq(basis, target, rcond=None)[0]
     return spline_coef, knots
@@ -198,8 +198,8 @@ def _branch_functions(coef, Z, knots):
             raise ValueError(f"knots must have shape (r, 2) = ({coef.shape[0]}, 2); got {knots.shape}.")
         g, dg = np.empty_like(Z), np.empty_like(Z)
         for l, (c, k) in enumerate(zip(coef, knots)):
-            B, dB = cubic_bspline_basis(Z[:, l], k, c.size)
-            g[:, l] = (B - cubic_bspline_basis(0.0, k, c.size)[0]) @ c
+            B, dB = branch_basis(Z[:, l], k, c.size)
+            g[:, l] = B @ c
             dg[:, l] = dB @ c
         return g, dg
     powers = Z[:, :, None] ** np.arange(coef.shape[1])  # z**k, k = 0..d-1

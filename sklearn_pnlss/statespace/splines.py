@@ -14,7 +14,7 @@ starts, plots and tests.
 """
 import numpy as np
 
-__all__ = ["cubic_bspline_basis", "greville_points", "spline_knots"]
+__all__ = ["branch_basis", "cubic_bspline_basis", "greville_points", "spline_knots"]
 
 
 def spline_knots(z, n_basis, margin=0.1):
@@ -79,3 +79,10 @@ def cubic_bspline_basis(z, knots, n_basis):
     B[rows, cols] = w + dw * run[:, None]
     dB[rows, cols] = dw
     return B, dB
+
+
+def branch_basis(z, knots, n_basis):
+    """What a spline branch's coefficients multiply, ``B_k(z) - B_k(0)``
+    (so that every branch is 0 at 0), and its derivative in ``z``."""
+    B, dB = cubic_bspline_basis(z, knots, n_basis)
+    return B - cubic_bspline_basis(0.0, knots, n_basis)[0], dB
