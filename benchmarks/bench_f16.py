@@ -19,8 +19,10 @@ periodic steady state and scored on their eight steady-state periods.
 
 Timing breakdown of the PNLSS fit (the library's own functions wrapped with
 timers, so the figures are those of the real fit): the sensitivity kernel,
-the Gram matrix J^T J (syrk), the LM step basis (eigendecomposition of the
-scaled Gram matrix), and the trial simulations; the arithmetic floor of
+the Gram matrix J^T J (syrk), the LM step solver's setup (the scaling, and
+an eigendecomposition or a power iteration) and its step solves (a
+Cholesky factorisation per trial damping for this model), and the trial
+simulations; the arithmetic floor of
 J^T J at the BLAS rate measured on the same machine is printed beside it.
 
 Results go to ``benchmarks/results/f16.json``; its ``best`` entry holds
@@ -64,7 +66,9 @@ def timers():
     times = defaultdict(list)
     targets = [
         (pnlss.PNLSSModel, "_sensitivity", "sensitivity kernel"),
-        (levenberg_marquardt, "lm_step_basis", "step basis (eigh)"),
+        (levenberg_marquardt, "_steps", "step solver setup"),
+        (levenberg_marquardt._CholeskySteps, "step", "step solves"),
+        (levenberg_marquardt._EigenSteps, "step", "step solves"),
         (objective.SimulationError, "residual", "trial simulations"),
         (objective.SimulationError, "normal_equations", "normal equations"),
     ]

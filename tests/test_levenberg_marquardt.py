@@ -153,3 +153,47 @@ def test_a_failed_step_costs_a_factor_that_doubles_with_each_failure_in_a_row():
     assert result.theta[0] == pytest.approx(1 / 3, rel=1e-12)
     with pytest.raises(ValueError, match="damping must be"):
         levenberg_marquardt(residual, normal_equations, np.array([0.0]), damping="fast")
+
+
+def test_the_cholesky_step_is_the_eigen_step_and_keeps_null_directions_still():
+    """Without dropped directions both solvers give the same damped step and
+    predicted fall at every damping, and nearly the same largest eigenvalue
+    (the first damping); with an exact null direction (y depends on p + q
+    only) the Cholesky step has no component along it either."""
+    from sklearn_pnlss.statespace.levenberg_marquardt import _CholeskySteps, _EigenSteps
+
+    rng = np.random.default_rng(3)
+    J = rng.standard_normal((40, 6)) * np.logspace(0, 3, 6)
+    G, g = J.T @ J, J.T @ rng.standard_normal(40)
+    eigen, cholesky = _EigenSteps(G, g, 0), _CholeskySteps(G, g)
+    assert cholesky.largest == pytest.approx(eigen.largest, rel=2e-2)  # power iteration: sets the damping only
+    for mu in eigen.largest * np.logspace(-8, 2, 6):
+        np.testing.assert_allclose(cholesky.step(mu), eigen.step(mu), rtol=1e-8)
+        assert cholesky.predicted_fall(mu) == pytest.approx(eigen.predicted_fall(mu), rel=1e-10)
+
+    x = np.linspace(-1, 1, 30)
+
+    def residual(th):
+        return (th[0] + th[1]) * x - 3.0 * x
+
+    def normal_equations(th):
+        J = np.column_stack([x, x])
+        return J.T @ J, J.T @ residual(th)
+
+    result = levenberg_marquardt(residual, normal_equations, np.array([0.5, -0.2]), max_iter=20, solver="cholesky")
+    assert result.theta.sum() == pytest.approx(3.0, rel=1e-8)
+    assert result.theta[0] - result.theta[1] == pytest.approx(0.7, rel=1e-10)
+    with pytest.raises(ValueError, match="solver must be"):
+        levenberg_marquardt(residual, normal_equations, np.array([0.0, 0.0]), solver="qr")
+
+
+@pytest.mark.parametrize("n_params, n_rows, expected", [
+    (300, 1000, "_EigenSteps"),        # small: the eigendecomposition is cheap outright
+    (1000, 100_000, "_EigenSteps"),    # large, but under a quarter of the Gram matrix
+    (1000, 10_000, "_CholeskySteps"),  # large beside the data
+])
+def test_auto_solver_keeps_the_eigendecomposition_where_it_is_cheap(n_params, n_rows, expected):
+    from sklearn_pnlss.statespace.levenberg_marquardt import _steps
+
+    G, g = np.eye(n_params), np.ones(n_params)
+    assert type(_steps(G, g, 0, "auto", n_rows)).__name__ == expected
