@@ -69,14 +69,17 @@ def test_jacobian_through_blas_is_exact():
 def test_normal_equations_do_not_depend_on_the_block_length(weighting, monkeypatch):
     rng = np.random.default_rng(2)
     model = _pnlss(rng)
-    U = 0.3 * rng.standard_normal((3 * P + 20, 1))
+    # A periodic input, five periods of transient (0.9^320: decayed): the
+    # frequency-weighted segment is periodic, its Jacobian taken in steady
+    # state (model.jacobian_blocks), the others' from rest.
+    U = np.tile(0.3 * rng.standard_normal((P, 1)), (8, 1))
     Y = rng.standard_normal((3 * P, 2))
     extra = {
         None: {},
         "time": {"time_weight": rng.uniform(0, 2, (3 * P, 2))},
         "frequency": {"freq_weight": rng.uniform(0, 2, (P // 2 + 1, 2)), "period": P},
     }[weighting]
-    cost = SimulationError([Segment(U, Y, 20, **extra)])
+    cost = SimulationError([Segment(U, Y, 5 * P, **extra)])
     J = objective.weigh(cost.segments[0], model.segment_jacobian(cost.segments[0]))
     e = cost.residual(model)
     # A block of a few samples: frequency weights round it up to a period.
@@ -85,3 +88,34 @@ def test_normal_equations_do_not_depend_on_the_block_length(weighting, monkeypat
     np.testing.assert_allclose(G, J.T @ J, rtol=1e-10, atol=1e-12 * np.abs(G).max())
     np.testing.assert_allclose(g, J.T @ e, rtol=1e-10, atol=1e-12 * np.abs(g).max())
     assert objective.block_length(cost.segments[0], 2, model.n_params) == (P if weighting == "frequency" else 5)
+
+
+@pytest.mark.parametrize("make", [_pnlss, _decoupled])
+def test_a_periodic_segment_is_differentiated_in_steady_state_without_its_transient(make):
+    """Slow poles (0.98: the state keeps 27 % of itself over a period):
+    the Jacobian from the steady-state fixed point, after a transient the
+    recursion skips, equals the one carried from rest through 40 periods
+    (blocks and all); the normal equations fold it in."""
+    rng = np.random.default_rng(4)
+    model = make(rng)
+    model = model.with_theta(model.theta)  # a copy
+    model.A[:] = np.diag(np.full(model.n_states, 0.98))
+    u = 0.05 * rng.standard_normal((P, 1))  # small enough for the slow decoupled model to stay bounded
+    Y = rng.standard_normal((2 * P, 2))
+    periodic = Segment(np.tile(u, (42, 1)), Y, 40 * P, period=P)
+    from_rest = Segment(periodic.U, Y, 40 * P)  # the same signal, no period: carried from rest
+    assert model.steady_state_segment(periodic) and not model.steady_state_segment(from_rest)
+    reference = model.segment_jacobian(from_rest)
+    assert np.all(np.isfinite(reference))
+    fold = {}
+    blocks = np.concatenate([J.copy() for _, J in model.jacobian_blocks(periodic, 50, steady=fold)])
+    n, n_sx = model.n_states, model.n_state_params
+    assert blocks.shape == reference.shape[:2] + (model.n_params + n,)
+    steady = blocks[..., : model.n_params].copy()
+    steady[..., :n_sx] += blocks[..., model.n_params :] @ fold["S0"]
+    np.testing.assert_allclose(steady, reference, rtol=1e-9, atol=1e-9 * np.abs(reference).max())
+    G, g = SimulationError([periodic]).normal_equations(model)
+    e = SimulationError([from_rest]).residual(model)
+    R = reference.reshape(-1, model.n_params)
+    np.testing.assert_allclose(G, R.T @ R, rtol=1e-9, atol=1e-9 * np.abs(G).max())
+    np.testing.assert_allclose(g, R.T @ e, rtol=1e-9, atol=1e-9 * np.abs(g).max())

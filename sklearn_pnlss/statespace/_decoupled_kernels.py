@@ -200,7 +200,9 @@ def decoupled_jacobian(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, spline, knots, 
     parameter (the last block) only when ``out_branch_params``; otherwise it
     is held fixed, but still enters the output. Resumable: ``x`` and ``Sx``
     (n, n_sx), the state and its sensitivity at the first sample of ``U``,
-    are advanced in place to the sample after the last."""
+    are advanced in place to the sample after the last. ``Sx`` may carry
+    start-state columns after the n_sx parameters', as in
+    ``pnlss_jacobian``."""
     N, m = U.shape
     n = A.shape[0]
     p = C.shape[0]
@@ -211,6 +213,8 @@ def decoupled_jacobian(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, spline, knots, 
     oV = oW + n * r
     oG = oV + (n + m) * r
     n_sx = oG + r * d  # parameters that move the state
+    n_cols = Sx.shape[1]  # and the start-state columns after them
+    n_par = J.shape[2] - (n_cols - n_sx)
     oC = n_sx
     oD = oC + p * n
     oWy = oD + p * m
@@ -220,7 +224,7 @@ def decoupled_jacobian(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, spline, knots, 
     g = np.empty(r)
     dg = np.empty(r)
     S = Sx.copy()  # dx/dtheta for the state-moving parameters
-    S_next = np.empty((n, n_sx))
+    S_next = np.empty((n, n_cols))
     Ax = np.empty((n, n))  # A + Wx diag(g') Vx^T
     Cx = np.empty((p, n))  # C + Wy diag(g') Vx^T
     x_now = x.copy()
@@ -241,6 +245,8 @@ def decoupled_jacobian(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, spline, knots, 
                     c = Cx[a, k]
                     for q in range(n_sx):
                         row[q] += c * S[k, q]
+                    for q in range(n_sx, n_cols):
+                        row[n_par + q - n_sx] += c * S[k, q]
                 _branch_direct(Wy[a], dg, s, zp, oV, oG, row)
                 for k in range(n):
                     row[oC + a * n + k] = x_now[k]
@@ -253,11 +259,11 @@ def decoupled_jacobian(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, spline, knots, 
         # direct dependence of row i on the parameters.
         for i in range(n):
             row = S_next[i]
-            for q in range(n_sx):
+            for q in range(n_cols):
                 row[q] = 0.0
             for k in range(n):
                 c = Ax[i, k]
-                for q in range(n_sx):
+                for q in range(n_cols):
                     row[q] += c * S[k, q]
             for k in range(n):
                 row[oA + i * n + k] += x_now[k]

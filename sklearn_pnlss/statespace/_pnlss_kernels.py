@@ -204,7 +204,10 @@ def pnlss_jacobian(A, B, C, D, E, F, exE, exF, lo, hi, U, x, Sx, n_skip, J):
     Resumable, so that a long signal can be taken in blocks of samples
     (memory): ``x`` (n,) is the state and ``Sx`` (n, n_sx) its sensitivity
     to the parameters that move the state at the first sample of ``U``; both
-    are advanced in place to the sample after the last.
+    are advanced in place to the sample after the last. ``Sx`` may carry
+    more columns than the n_sx parameters: sensitivities to a start state,
+    propagated without direct terms and written to the last columns of
+    ``J`` (after the parameters'; see ``StateSpaceModel.jacobian_blocks``).
 
     The sensitivities are carried through the local linear map by a matrix
     product (BLAS): it is the bulk of the arithmetic, n^2 n_sx per sample,
@@ -216,7 +219,9 @@ def pnlss_jacobian(A, B, C, D, E, F, exE, exF, lo, hi, U, x, Sx, n_skip, J):
     p = C.shape[0]
     nE = exE.shape[0]
     nF = exF.shape[0]
-    n_sx = Sx.shape[1]  # n * n + n * m + n * nE: parameters that move the state
+    n_sx = n * n + n * m + n * nE  # parameters that move the state
+    n_cols = Sx.shape[1]  # and the start-state columns after them
+    n_par = J.shape[2] - (n_cols - n_sx)
     oA, oB, oE = 0, n * n, n * n + n * m
     oC = n_sx
     oD = oC + p * n
@@ -229,8 +234,8 @@ def pnlss_jacobian(A, B, C, D, E, F, exE, exF, lo, hi, U, x, Sx, n_skip, J):
     eta = np.empty(nF)
     deta = np.empty((nF, n))
     S = Sx.copy()  # contiguous work copies, swapped every sample
-    S_next = np.empty((n, n_sx))
-    Jx = np.empty((p, n_sx))
+    S_next = np.empty((n, n_cols))
+    Jx = np.empty((p, n_cols))
     Ax = np.empty((n, n))  # A + E dzeta/dx
     Cx = np.empty((p, n))  # C + F deta/dx
     x_now = x.copy()
@@ -254,8 +259,10 @@ def pnlss_jacobian(A, B, C, D, E, F, exE, exF, lo, hi, U, x, Sx, n_skip, J):
             for a in range(p):
                 for q in range(n_sx):
                     Jt[a, q] = Jx[a, q]
-                for q in range(n_sx, Jt.shape[1]):
+                for q in range(n_sx, n_par):
                     Jt[a, q] = 0.0
+                for q in range(n_sx, n_cols):
+                    Jt[a, n_par + q - n_sx] = Jx[a, q]
                 for k in range(n):
                     Jt[a, oC + a * n + k] = x_now[k]
                 for k in range(m):

@@ -238,7 +238,7 @@ class StateSpaceModel:
             pass
         return J
 
-    def jacobian_blocks(self, seg, block_length, out=None, buffer=None, start=None):
+    def jacobian_blocks(self, seg, block_length, out=None, buffer=None, start=None, steady=None):
         """The rows of :meth:`segment_jacobian` ``block_length`` samples at a
         time: yields ``(start, J_block)``, ``J_block`` of shape (L, p,
         n_params) holding rows ``start:start + L`` of the segment's error.
@@ -256,21 +256,60 @@ class StateSpaceModel:
         spares even the block's. ``start``: the segment's
         :meth:`segment_start`, when already read (reading it is a
         Gauss-Newton fit of its first samples).
+
+        ``steady`` (a dict), on a periodic segment with a transient: the
+        sensitivities of the periodic steady state, without running the
+        recursion through the transient. The state is simulated through the
+        transient alone; the recursion starts at the first scored sample
+        from zero sensitivity, and carries n more columns, ``K = dy/dx0``
+        (the blocks are then (L, p, n_params + n_states), those columns
+        last, ``buffer`` and ``out`` sized to match). The sensitivity of the
+        start state in steady state, ``S0``, is the fixed point of the
+        periods, ``S0 = Phi S0 + R`` with ``Phi`` the state's own
+        sensitivity over the segment and ``R`` the parameters' from zero;
+        once the blocks are exhausted ``steady["S0"]`` holds it, and the
+        Jacobian is ``J[..., :n_params] + K @ [S0, 0]``. Exact in steady
+        state, and the transient (up to a period, on a lightly damped
+        structure) costs a simulation instead of a sensitivity recursion.
+        Other segments: ``steady`` is ignored and left empty.
         """
         U = np.ascontiguousarray(seg.U)
         T = U.shape[0] - seg.n_skip
         block_length = max(1, min(int(block_length), T))
-        if out is None and buffer is None:
-            buffer = np.empty((block_length, self.C.shape[0], self.n_params))
         x = (self.segment_start(seg) if start is None else start).copy()
-        Sx = np.zeros((self.n_states, self.n_state_params))
-        # The transient before the first row, then the blocks of rows.
-        self._sensitivity(U[: seg.n_skip], x, Sx, seg.n_skip, (out if out is not None else buffer)[:0])
+        n, n_sx = self.n_states, self.n_state_params
+        extend = steady is not None and self.steady_state_segment(seg)
+        n_cols = self.n_params + (n if extend else 0)
+        if out is None and buffer is None:
+            buffer = np.empty((block_length, self.C.shape[0], n_cols))
+        if extend:
+            Sx = np.zeros((n, n_sx + n))
+            Sx[:, n_sx:] = np.eye(n)
+            _, _, _, x = self._run(U[: seg.n_skip], x)
+        else:
+            Sx = np.zeros((n, n_sx))
+            # The transient before the first row, then the blocks of rows.
+            self._sensitivity(U[: seg.n_skip], x, Sx, seg.n_skip, (out if out is not None else buffer)[:0])
         for start in range(0, T, block_length):
             stop = min(start + block_length, T)
             J = out[start:stop] if out is not None else buffer[: stop - start]
             self._sensitivity(U[seg.n_skip + start : seg.n_skip + stop], x, Sx, 0, J)
             yield start, J
+        if extend:
+            R, Phi = Sx[:, :n_sx], Sx[:, n_sx:]
+            steady["S0"] = np.linalg.solve(np.eye(n) - Phi, R)
+
+    @staticmethod
+    def steady_state_segment(seg):
+        """Whether ``seg`` is periodic steady state with a transient
+        prepended: whole periods scored after it, and an input that repeats
+        with the period throughout, transient included (an averaged period
+        does; measured periods, each with its own noise, do not). Its
+        Jacobian can then be taken in steady state (see
+        :meth:`jacobian_blocks`)."""
+        P = seg.period
+        return (bool(P) and seg.n_skip > 0 and seg.Y.shape[0] % P == 0
+                and np.array_equal(seg.U[P:], seg.U[:-P]))
 
     def residual(self, segments):
         """Stacked unweighted simulation errors, or None when any segment

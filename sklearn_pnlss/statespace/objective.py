@@ -133,11 +133,12 @@ class SimulationError:
             # for J^T J) rather than SciPy's BLAS: the eigendecomposition of
             # the step is numpy's too, and two BLAS libraries whose threads
             # wait in turn for work slowed a two-thread fit twofold (Bouc-Wen,
-            # degrees 3, 5, 7).
+            # degrees 3, 5, 7). A periodic segment's Jacobian is taken in
+            # steady state (model.jacobian_blocks): its blocks carry n
+            # start-state columns more, folded in once the segment is done.
             G = np.zeros((model.n_params, model.n_params))
-            product = np.empty_like(G)
             g = np.zeros(model.n_params)
-            buffer = None  # one work array for the blocks of all segments
+            work = {}  # per column count: (Gram, product, gradient, block buffer), reused
             for seg in segments:
                 if id(seg) in known:
                     start, err = known[id(seg)]
@@ -146,17 +147,43 @@ class SimulationError:
                     err = model.segment_error(seg, start)
                 if err is None:
                     return None
-                L = min(block_length(seg, err.shape[1], model.n_params), err.shape[0])
-                if buffer is None or buffer.shape[0] < L:
-                    buffer = np.empty((L, err.shape[1], model.n_params))
-                for row, J in model.jacobian_blocks(seg, L, buffer=buffer, start=start):
+                steady = model.steady_state_segment(seg)
+                n_cols = model.n_params + (model.n_states if steady else 0)
+                L = min(block_length(seg, err.shape[1], n_cols), err.shape[0])
+                if n_cols not in work or work[n_cols][3].shape[0] < L:
+                    Gs = G if not steady else np.empty((n_cols, n_cols))
+                    gs = g if not steady else np.empty(n_cols)
+                    work[n_cols] = (Gs, np.empty((n_cols, n_cols)), gs, np.empty((L, err.shape[1], n_cols)))
+                Gs, product, gs, buffer = work[n_cols]
+                if steady:
+                    Gs[:], gs[:] = 0.0, 0.0
+                fold = {} if steady else None
+                for row, J in model.jacobian_blocks(seg, L, buffer=buffer, start=start, steady=fold):
                     e = weigh(seg, err[row : row + J.shape[0], :, None], row)[:, 0]
                     Jw = weigh(seg, J, row)
-                    G += np.matmul(Jw.T, Jw, out=product)
-                    g += Jw.T @ e
+                    Gs += np.matmul(Jw.T, Jw, out=product)
+                    gs += Jw.T @ e
+                if steady:
+                    _fold_start_state(G, g, Gs, gs, fold["S0"], model.n_state_params)
             return G, g
 
         parts = self._over_chunks(chunk_sums)
         if any(part is None for part in parts):
             return None
         return sum(G for G, _ in parts), sum(g for _, g in parts)
+
+
+def _fold_start_state(G, g, G_ext, g_ext, S0, n_sx):
+    """Add to ``G, g`` the Gram matrix and gradient of ``J + K Z``, given
+    those of ``[J, K]`` (``K``: the last n columns, the output's sensitivity
+    to the start state) and ``Z = [S0, 0]``, the start state's sensitivity
+    to the parameters (``S0``: (n, n_sx), the first n_sx of them)."""
+    p = G.shape[0]
+    KK = G_ext[p:, p:]
+    G += G_ext[:p, :p]
+    cross = G_ext[:p, p:] @ S0  # (J' K) S0, on the first n_sx columns
+    G[:, :n_sx] += cross
+    G[:n_sx, :] += cross.T
+    G[:n_sx, :n_sx] += S0.T @ KK @ S0
+    g += g_ext[:p]
+    g[:n_sx] += S0.T @ g_ext[p:]
