@@ -136,9 +136,12 @@ class SimulationError:
             # degrees 3, 5, 7). A periodic segment's Jacobian is taken in
             # steady state (model.jacobian_blocks): its blocks carry n
             # start-state columns more, folded in once the segment is done.
-            G = np.zeros((model.n_params, model.n_params))
-            g = np.zeros(model.n_params)
-            work = {}  # per column count: (Gram, product, gradient, block buffer), reused
+            n_par, n = model.n_params, model.n_states
+            G = np.zeros((n_par, n_par))
+            product = np.empty_like(G)
+            g = np.zeros(n_par)
+            buffers = {}  # one work array per column count, for the blocks of all segments
+            start_states = []  # per steady segment: what its start state folds in
             for seg in segments:
                 if id(seg) in known:
                     start, err = known[id(seg)]
@@ -147,24 +150,27 @@ class SimulationError:
                     err = model.segment_error(seg, start)
                 if err is None:
                     return None
-                steady = model.steady_state_segment(seg)
-                n_cols = model.n_params + (model.n_states if steady else 0)
+                steady = {} if model.steady_state_segment(seg) else None
+                n_cols = n_par + (n if steady is not None else 0)
                 L = min(block_length(seg, err.shape[1], n_cols), err.shape[0])
-                if n_cols not in work or work[n_cols][3].shape[0] < L:
-                    Gs = G if not steady else np.empty((n_cols, n_cols))
-                    gs = g if not steady else np.empty(n_cols)
-                    work[n_cols] = (Gs, np.empty((n_cols, n_cols)), gs, np.empty((L, err.shape[1], n_cols)))
-                Gs, product, gs, buffer = work[n_cols]
-                if steady:
-                    Gs[:], gs[:] = 0.0, 0.0
-                fold = {} if steady else None
-                for row, J in model.jacobian_blocks(seg, L, buffer=buffer, start=start, steady=fold):
+                if n_cols not in buffers or buffers[n_cols].shape[0] < L:
+                    buffers[n_cols] = np.empty((L, err.shape[1], n_cols))
+                if steady is not None:
+                    cross, KK, Ke = np.zeros((n_par, n)), np.zeros((n, n)), np.zeros(n)
+                for row, J in model.jacobian_blocks(seg, L, buffer=buffers[n_cols], start=start, steady=steady):
                     e = weigh(seg, err[row : row + J.shape[0], :, None], row)[:, 0]
                     Jw = weigh(seg, J, row)
-                    Gs += np.matmul(Jw.T, Jw, out=product)
-                    gs += Jw.T @ e
-                if steady:
-                    _fold_start_state(G, g, Gs, gs, fold["S0"], model.n_state_params)
+                    Jp = Jw[:, :n_par]  # a strided view: syrk takes it as it is
+                    G += np.matmul(Jp.T, Jp, out=product)
+                    g += Jp.T @ e
+                    if steady is not None:
+                        K = Jw[:, n_par:]
+                        cross += Jp.T @ K
+                        KK += K.T @ K
+                        Ke += K.T @ e
+                if steady is not None:
+                    start_states.append((cross, KK, Ke, steady["S0"]))
+            _fold_start_states(G, g, start_states, model.n_state_params)
             return G, g
 
         parts = self._over_chunks(chunk_sums)
@@ -173,17 +179,24 @@ class SimulationError:
         return sum(G for G, _ in parts), sum(g for _, g in parts)
 
 
-def _fold_start_state(G, g, G_ext, g_ext, S0, n_sx):
-    """Add to ``G, g`` the Gram matrix and gradient of ``J + K Z``, given
-    those of ``[J, K]`` (``K``: the last n columns, the output's sensitivity
-    to the start state) and ``Z = [S0, 0]``, the start state's sensitivity
-    to the parameters (``S0``: (n, n_sx), the first n_sx of them)."""
+def _fold_start_states(G, g, start_states, n_sx):
+    """Turn the normal equations of ``J`` into those of ``J + K Z`` for each
+    steady segment, given its ``(J'K, K'K, K'e, S0)``: ``K`` is the output's
+    sensitivity to the segment's start state, ``Z = [S0, 0]`` that state's
+    sensitivity to the parameters (``S0``: (n, n_sx), the first n_sx).
+
+    ``(J + K Z)'(J + K Z) - J'J = JK Z + Z' JK' + Z' KK Z = X Y'`` with
+    ``X = [JK, Z']`` and ``Y = [Z', JK + Z' KK]``: a symmetric update of
+    rank 2n per segment, all segments in one matrix product.
+    """
+    if not start_states:
+        return
     p = G.shape[0]
-    KK = G_ext[p:, p:]
-    G += G_ext[:p, :p]
-    cross = G_ext[:p, p:] @ S0  # (J' K) S0, on the first n_sx columns
-    G[:, :n_sx] += cross
-    G[:n_sx, :] += cross.T
-    G[:n_sx, :n_sx] += S0.T @ KK @ S0
-    g += g_ext[:p]
-    g[:n_sx] += S0.T @ g_ext[p:]
+    X, Y = [], []
+    for cross, KK, Ke, S0 in start_states:
+        Zt = np.zeros((p, S0.shape[0]))
+        Zt[:n_sx] = S0.T
+        X += [cross, Zt]
+        Y += [Zt, cross + Zt @ KK]
+        g += Zt @ Ke
+    G += np.hstack(X) @ np.hstack(Y).T
