@@ -311,6 +311,19 @@ class StateSpaceModel:
         return (bool(P) and seg.n_skip > 0 and seg.Y.shape[0] % P == 0
                 and np.array_equal(seg.U[P:], seg.U[:-P]))
 
+    def steady_state_pays(self, seg):
+        """Whether taking ``seg``'s Jacobian in steady state is the cheaper
+        of the two exact ways: it spares the recursion through the
+        transient (n_skip samples of n_state_params columns) and costs n
+        start-state columns over the scored samples, twice over for their
+        products and the fold. The F-16's levels (a transient of a whole
+        period, 2,860 columns) gain half the recursion; the Bouc-Wen
+        record (713 samples of transient before 8,192, 60 columns) would
+        gain nothing and keeps the plain recursion."""
+        T = seg.U.shape[0] - seg.n_skip
+        return (self.steady_state_segment(seg)
+                and seg.n_skip * self.n_state_params > 2 * T * self.n_states)
+
     def residual(self, segments):
         """Stacked unweighted simulation errors, or None when any segment
         diverges."""

@@ -150,7 +150,7 @@ class SimulationError:
                     err = model.segment_error(seg, start)
                 if err is None:
                     return None
-                steady = {} if model.steady_state_segment(seg) else None
+                steady = {} if model.steady_state_pays(seg) else None
                 n_cols = n_par + (n if steady is not None else 0)
                 L = min(block_length(seg, err.shape[1], n_cols), err.shape[0])
                 if n_cols not in buffers or buffers[n_cols].shape[0] < L:
