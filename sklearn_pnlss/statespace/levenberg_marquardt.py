@@ -29,6 +29,11 @@ whole (memory), and a (n_params x n_params) eigenproblem replaces an SVD of a
 training record). The precision lost by squaring J only affects directions
 whose singular values are below sqrt(eps) of the largest; those are dropped.
 
+A model large beside its data (the F-16's 2,893 parameters on 98,304
+residuals) has each step solved by a Cholesky factorisation instead (see
+``solver``): the eigendecomposition would cost more than a quarter of the
+Gram matrix itself.
+
 A model may also give a ``basis``: the step is then solved in the
 coordinates ``phi`` of ``theta = theta_k + basis @ phi``. It is the same
 model and the same cost; only the step changes, since the damping is
@@ -140,15 +145,21 @@ def _largest_eigenvalue(Gs, n_iter=30):
     return float(v @ Gs @ v)
 
 
+#: solver="auto" keeps the eigendecomposition for at most this many
+#: parameters (cheap outright: 40 ms at 500 on 2 cores) ...
+EIGH_MAX_PARAMS = 512
+#: ... or while the residual has this many rows per parameter: it costs
+#: about 15 p^3 flops (numpy/OpenBLAS, measured on 2 cores) against the
+#: Gram matrix's n_rows p^2, so under a quarter of it.
+EIGH_ROWS_PER_PARAM = 60
+
+
 def _steps(G, g, n_drop, solver, n_rows):
     """The step solver for this iteration (see ``solver`` of
     levenberg_marquardt)."""
     if solver == "auto":
-        # The eigendecomposition costs about 15 p^3 flops (numpy/OpenBLAS,
-        # measured on 2 cores), the Gram matrix it decomposes n_rows p^2:
-        # kept where it is cheap outright or under a quarter of the Gram.
         p = g.size
-        solver = "eigh" if p <= 512 or 60 * p <= n_rows else "cholesky"
+        solver = "eigh" if p <= EIGH_MAX_PARAMS or EIGH_ROWS_PER_PARAM * p <= n_rows else "cholesky"
     return _EigenSteps(G, g, n_drop) if solver == "eigh" else _CholeskySteps(G, g)
 
 
@@ -184,6 +195,16 @@ def levenberg_marquardt(
         How the damping changes between steps: Nielsen's rule (see the
         module), or the PNLSS toolbox's (lambda halved on success,
         multiplied by 10 on failure), kept to compare with it.
+    solver : {"auto", "eigh", "cholesky"}, default="auto"
+        How each damped step is solved. "eigh": in the right singular
+        vectors of the scaled Jacobian, the ``n_drop`` smallest dropped
+        (one eigendecomposition per iteration). "cholesky": a Cholesky
+        factorisation of the damped scaled Gram matrix per trial damping,
+        nothing dropped (the gradient has no component along an exact
+        null direction, and the damping bounds the nearly null ones),
+        about 40 times cheaper for a large model. "auto": "eigh" for at
+        most :data:`EIGH_MAX_PARAMS` parameters or while the residual has
+        :data:`EIGH_ROWS_PER_PARAM` rows per parameter, "cholesky" beyond.
 
     Returns
     -------

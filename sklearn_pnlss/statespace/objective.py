@@ -135,7 +135,7 @@ class SimulationError:
             # wait in turn for work slowed a two-thread fit twofold (Bouc-Wen,
             # degrees 3, 5, 7). A periodic segment's Jacobian is taken in
             # steady state (model.jacobian_blocks): its blocks carry n
-            # start-state columns more, folded in once the segment is done.
+            # start-state columns more, folded in at the end (_fold_start_states).
             n_par, n = model.n_params, model.n_states
             G = np.zeros((n_par, n_par))
             product = np.empty_like(G)
