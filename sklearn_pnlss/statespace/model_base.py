@@ -297,7 +297,10 @@ class StateSpaceModel:
             yield start, J
         if extend:
             R, Phi = Sx[:, :n_sx], Sx[:, n_sx:]
-            steady["S0"] = np.linalg.solve(np.eye(n) - Phi, R)
+            try:
+                steady["S0"] = np.linalg.solve(np.eye(n) - Phi, R)
+            except np.linalg.LinAlgError:  # a pole at 1: no steady state; take the start as given
+                steady["S0"] = np.zeros_like(R)
 
     @staticmethod
     def steady_state_segment(seg):
