@@ -109,17 +109,17 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         stable ``A`` gives a bounded state for every bounded input: the
         model cannot run away on a new signal of the training kind and level
         (bounded by construction). "linear": continued along its edge
-        tangent (continuous derivative, no such guarantee; -93.06 dB where
-        "hold" gives -94.67 dB, see ``range_margin``). "polynomial": the
+        tangent (continuous derivative, no such guarantee; -92.22 dB where
+        "hold" gives -93.35 dB, see ``range_margin``). "polynomial": the
         plain polynomial everywhere. Inside the range nothing changes.
     range_margin : float, default=0.0
         Widening of each branch's trusted range on each side, as a fraction
         of its width. Measured on Bouc-Wen (3 branches of degree 10, the main
         job's model, its simulated 55 N test multisine;
-        ``benchmarks/bench_branch_margins.py``): 0 gives -94.67 dB, 0.02
-        -93.20 dB, 0.1 -86.49 dB, and the plain polynomial -90.49 dB;
-        high-degree branches are steep at their edges, so the default trusts
-        only the range the data covered.
+        ``benchmarks/bench_branch_margins.py``): 0 gives -93.35 dB, 0.02
+        -93.45 dB, 0.1 -26.97 dB (a fit that fails on the test signal), and
+        the plain polynomial -91.01 dB; high-degree branches are steep at
+        their edges, so the default trusts only the range the data covered.
     average_periods, weighting, band, max_iter, tol, n_transient
         As in :class:`PNLSSRegressor`, for the decoupled model's fit.
     n_jobs : int or None, default=None
