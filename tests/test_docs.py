@@ -23,6 +23,7 @@ from pathlib import Path
 import pytest
 
 import sklearn_pnlss
+from sklearn_pnlss.statespace import levenberg_marquardt
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
@@ -315,12 +316,6 @@ def _f16_iteration(key):
 def _f16_step():
     """The step's share of that iteration: the solver's setup and solves."""
     return _f16_iteration("step solver setup") + _f16_iteration("step solves")
-
-
-def _lm_rule():
-    from sklearn_pnlss.statespace import levenberg_marquardt
-
-    return levenberg_marquardt
 
 
 def _field(bench, model):
@@ -749,7 +744,7 @@ FIGURES = [
     Figure(PN, "its steps cost 0.58 s per iteration, where the eigendecomposition alone would take 4.02 s", F16,
            lambda: [_f16_step(), _f16_iteration("eigendecomposition instead (not used)")]),
     Figure(PN, "with over 512 parameters and fewer than 60 residuals per parameter", "the solver's rule",
-           lambda: [_lm_rule().EIGH_MAX_PARAMS, _lm_rule().EIGH_ROWS_PER_PARAM]),
+           lambda: [levenberg_marquardt.EIGH_MAX_PARAMS, levenberg_marquardt.EIGH_ROWS_PER_PARAM]),
     Figure(PN, "The F-16's model of 2893 parameters", F16,
            lambda: [16, _f16_model("PNLSSRegressor(10, (2, 3), states)")["n_params"]]),
     Figure(R, "On three draws of the paper's data it reaches -97.68 to -98.64 dB on the official test multisine, as "

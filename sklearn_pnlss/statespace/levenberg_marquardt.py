@@ -59,15 +59,22 @@ class LMResult:
     history: list = field(default_factory=list)  # (iteration, cost, lambda)
 
 
+def _scaled_gram(G):
+    """Column scales of the Jacobian (its columns' norms, 1 for a zero
+    column) and the Gram matrix of the scaled columns."""
+    scale = np.sqrt(np.diag(G))
+    scale[scale == 0] = 1.0
+    return scale, G / np.outer(scale, scale)
+
+
 def lm_step_basis(G, n_drop):
     """Column scales, kept singular values and right singular vectors of the
     column-scaled Jacobian, from its Gram matrix ``G = J^T J``.
 
     Returns ``scale`` (n_params,), ``S`` (k,) descending, ``V`` (n_params, k).
     """
-    scale = np.sqrt(np.diag(G))
-    scale[scale == 0] = 1.0
-    w, V = np.linalg.eigh(G / np.outer(scale, scale))
+    scale, Gs = _scaled_gram(G)
+    w, V = np.linalg.eigh(Gs)
     w, V = w[::-1], V[:, ::-1]
     keep = max(w.size - n_drop, 1)
     # Below eps * largest, an eigenvalue of the Gram matrix is rounding noise.
@@ -105,9 +112,8 @@ class _CholeskySteps:
     ones."""
 
     def __init__(self, G, g):
-        scale = np.sqrt(np.diag(G))
-        scale[scale == 0] = 1.0
-        self.scale, self.Gs, self.gs = scale, G / np.outer(scale, scale), g / scale
+        self.scale, self.Gs = _scaled_gram(G)
+        self.gs = g / self.scale
         self.largest = _largest_eigenvalue(self.Gs)
         self._last = None
 
