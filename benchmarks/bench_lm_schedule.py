@@ -127,7 +127,7 @@ def f16(args):
             t0 = time.perf_counter()
             model.fit(bla.transform(X), y)
             fit_s = time.perf_counter() - t0
-        per_level, mean = bench_f16.nrmse(model, test)
+        per_level, mean, _ = bench_f16.nrmse(model, test)
         rows.append({"damping": damping, "fit_s": fit_s, "mean_nrmse": mean, "nrmse": per_level,
                      **cost_trace(model)})
         print(f"f16      {damping:8s} 20 it: training cost {rows[-1]['final_cost_db']:7.2f} dB, "
