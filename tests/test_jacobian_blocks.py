@@ -119,3 +119,46 @@ def test_a_periodic_segment_is_differentiated_in_steady_state_without_its_transi
     R = reference.reshape(-1, model.n_params)
     np.testing.assert_allclose(G, R.T @ R, rtol=1e-9, atol=1e-9 * np.abs(G).max())
     np.testing.assert_allclose(g, R.T @ e, rtol=1e-9, atol=1e-9 * np.abs(g).max())
+
+
+@pytest.mark.parametrize("weighting", [None, "time"])
+def test_a_large_model_forms_its_gram_matrix_in_single_precision(weighting, monkeypatch):
+    """Above SINGLE_PRECISION_PARAMS the blocks are single precision: J^T J
+    agrees with the double one to single precision, and so does the
+    gradient J^T e, summed in double precision from the rounded rows; with
+    a periodic segment (start-state columns folded in) and with a time
+    weight (which takes the rounded rows to double precision)."""
+    rng = np.random.default_rng(5)
+    model = _pnlss(rng, n=4, degrees=(2, 3))
+    U = np.tile(0.3 * rng.standard_normal((P, 1)), (6, 1))
+    Y = rng.standard_normal((2 * P, 2))
+    extra = {"time_weight": rng.uniform(0, 2, (2 * P, 2))} if weighting else {"period": P}
+    cost = SimulationError([Segment(U, Y, 4 * P, **extra)])
+    monkeypatch.setattr(objective, "SINGLE_PRECISION_PARAMS", 10**9)
+    G64, g64 = cost.normal_equations(model)
+    monkeypatch.setattr(objective, "SINGLE_PRECISION_PARAMS", model.n_params - 1)
+    assert objective.jacobian_dtype(model.n_params) == np.float32
+    G32, g32 = cost.normal_equations(model)
+    assert G32.dtype == g32.dtype == np.float64
+    scale = np.sqrt(np.outer(np.diag(G64), np.diag(G64)))
+    err = np.abs(G32 - G64) / scale
+    assert 0.0 < err.max() < 1e-5  # rounded: single precision was used
+    np.testing.assert_allclose(g32, g64, rtol=1e-5, atol=1e-6 * np.abs(g64).max())
+
+
+@pytest.mark.parametrize("make", [_pnlss, _decoupled])
+def test_steady_state_simulation_reuses_the_converged_period(make):
+    """A signal that repeats one period is simulated in steady state by the
+    converged period itself, repeated; one whose periods differ is simulated
+    through from the steady-state start of its first period. Both agree
+    with a simulation from that start to round-off."""
+    rng = np.random.default_rng(6)
+    model = make(rng)
+    u = 0.05 * rng.standard_normal((P, 1))  # the decoupled model stays bounded
+    x0 = model.steady_state_start(u)
+    for U in (np.tile(u, (3, 1)), np.vstack([u, 0.5 * u, u])):
+        reference = model.simulate(U, x0)[0]
+        np.testing.assert_allclose(model.simulate_signal(U, P), reference, rtol=1e-9, atol=1e-12)
+        states = model.states_inputs(U, P)
+        np.testing.assert_allclose(states[:, -1:], U)
+        np.testing.assert_allclose(states[:, :-1], model.simulate_states(U, x0), rtol=1e-9, atol=1e-12)

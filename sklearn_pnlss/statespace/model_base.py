@@ -155,27 +155,53 @@ class StateSpaceModel:
     def steady_state_start(self, U_period, max_periods=200, rtol=1e-10):
         """State at the start of a period once the response is periodic:
         period after period from rest until the state repeats."""
+        return self._steady_period(U_period, max_periods, rtol)[0]
+
+    def _steady_period(self, U_period, max_periods=200, rtol=1e-10):
+        """``(x, Y, X)``: the state at the start of a period once the
+        response is periodic (period after period from rest until the state
+        repeats), and the outputs and states of the last period simulated,
+        which started within ``rtol`` of it: the steady-state period itself,
+        so that callers need not simulate it once more (None, None when the
+        state has not repeated within ``max_periods``)."""
+        U_period = np.ascontiguousarray(U_period)
         x = np.zeros(self.n_states)
         for _ in range(max_periods):
-            _, x_new = self.simulate(U_period, x)
-            done = np.linalg.norm(x_new - x) <= rtol * (1.0 + np.linalg.norm(x_new))
+            Y, X, n_ok, x_new = self._run(U_period, x)
+            if n_ok < U_period.shape[0]:
+                raise DivergenceError(f"the simulation diverges at sample {n_ok}", sample=n_ok)
+            if np.linalg.norm(x_new - x) <= rtol * (1.0 + np.linalg.norm(x_new)):
+                return x_new, Y, X
             x = x_new
-            if done:
-                break
-        return x
+        return x, None, None
+
+    def _steady_run(self, U, period):
+        """Outputs and states of ``U`` in periodic steady state: the
+        converged period repeated when ``U`` repeats it, else a simulation
+        of ``U`` from the steady-state start."""
+        x0, Y, X = self._steady_period(U[:period])
+        k = U.shape[0] // period
+        if Y is not None and (k == 1 or np.array_equal(U.reshape(k, period, -1), np.broadcast_to(
+                U[:period], (k, period, U.shape[1])))):
+            return np.tile(Y, (k, 1)), np.tile(X, (k, 1))
+        Y, X, n_ok, _ = self._run(np.ascontiguousarray(U), x0)
+        if n_ok < U.shape[0]:
+            raise DivergenceError(f"the simulation diverges at sample {n_ok}", sample=n_ok)
+        return Y, X
 
     def simulate_signal(self, U, period=None):
         """Simulate one signal; periodic steady state when ``period`` is
         given (the length is a multiple of it), else from rest."""
-        x0 = None if period is None else self.steady_state_start(U[:period])
-        return self.simulate(U, x0)[0]
+        if period is None:
+            return self.simulate(U)[0]
+        return self._steady_run(U, period)[0]
 
     def states_inputs(self, U, period=None):
         """``[x; u]`` (N, n + m) along the simulation of one signal ``U``:
         in periodic steady state when its length is a whole number of
         ``period`` samples, else from rest. Raises :class:`DivergenceError`."""
-        x0 = self.steady_state_start(U[:period]) if is_periodic(U.shape[0], period) else None
-        return np.hstack([self.simulate_states(U, x0), U])
+        X = self._steady_run(U, period)[1] if is_periodic(U.shape[0], period) else self.simulate_states(U)
+        return np.hstack([X, U])
 
     def trajectory(self, U_list, period=None):
         """:meth:`states_inputs` of each signal of ``U_list``, stacked: the
