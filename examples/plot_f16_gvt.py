@@ -132,10 +132,10 @@ if train is not None:
 # rattles, and the structure's modes above 15 Hz ring. A model whose
 # dynamics were read off the 2-15 Hz band produces none of it.
 # :func:`~sklearn_pnlss.metrics.nrmse_by_band` splits each output's NRMSE
-# over frequency bands (the squares add up to the total): on the highest
-# test level most of what remains of the decoupled model's error, on the
-# wing and payload accelerations, lies above 15 Hz, in the linear model's
-# error unchanged.
+# over frequency bands (the squares add up to the total): on the higher
+# test levels most of what remains of the decoupled model's error at the
+# drive point and on the payload lies above 15 Hz, where it is the linear
+# model's error unchanged.
 if train is not None:
     from sklearn_pnlss.metrics import nrmse_by_band
 
