@@ -162,3 +162,23 @@ def test_steady_state_simulation_reuses_the_converged_period(make):
         states = model.states_inputs(U, P)
         np.testing.assert_allclose(states[:, -1:], U)
         np.testing.assert_allclose(states[:, :-1], model.simulate_states(U, x0), rtol=1e-9, atol=1e-12)
+
+
+def test_single_precision_that_overflows_falls_back_to_double(monkeypatch):
+    """A monomial x**5 of a state of 1e5 has a sensitivity of 1e25, whose
+    square is beyond single precision: the normal equations are formed
+    again in double precision, finite, and without a warning (tests turn
+    warnings into errors)."""
+    rng = np.random.default_rng(7)
+    model = PNLSSModel(A=np.array([[0.5]]), B=np.array([[1.0]]), C=np.array([[1.0]]), D=np.zeros((1, 1)),
+                       E=np.array([[1e-30]]), F=np.zeros((1, 0)), exE=np.array([[5, 0]]),
+                       exF=np.zeros((0, 2), dtype=np.int64))
+    seg = Segment(1e5 * rng.standard_normal((60, 1)), np.zeros((50, 1)), 10)
+    cost = SimulationError([seg])
+    monkeypatch.setattr(objective, "SINGLE_PRECISION_PARAMS", 10**9)
+    G64, g64 = cost.normal_equations(model)
+    assert np.all(np.isfinite(G64)) and np.abs(G64).max() > 1e45
+    monkeypatch.setattr(objective, "SINGLE_PRECISION_PARAMS", 1)
+    G, g = cost.normal_equations(model)
+    np.testing.assert_array_equal(G, G64)
+    np.testing.assert_array_equal(g, g64)

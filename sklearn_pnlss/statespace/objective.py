@@ -159,7 +159,7 @@ class SimulationError:
         key, simulated = self._simulated
         known = simulated if key == _key(model) else {}
 
-        def chunk_sums(segments):
+        def chunk_sums(segments, dtype):
             # Accumulated in place: one Gram matrix per thread, not per
             # segment, one Jacobian block at a time. numpy's product (syrk
             # for J^T J) rather than SciPy's BLAS: the eigendecomposition of
@@ -169,7 +169,6 @@ class SimulationError:
             # steady state (model.jacobian_blocks): its blocks carry n
             # start-state columns more, folded in at the end (_fold_start_states).
             n_par, n = model.n_params, model.n_states
-            dtype = jacobian_dtype(n_par)
             G = np.zeros((n_par, n_par))
             products = {}  # J^T J work arrays by size and precision (weights give doubles)
 
@@ -223,10 +222,26 @@ class SimulationError:
             _fold_start_states(G, g, start_states, model.n_state_params)
             return G, g
 
-        parts = self._over_chunks(chunk_sums)
-        if any(part is None for part in parts):
-            return None
-        return sum(G for G, _ in parts), sum(g for _, g in parts)
+        def sums(dtype):
+            def chunk(segments):
+                # in each thread: numpy's error state is per thread
+                with np.errstate(over="ignore", invalid="ignore"):
+                    return chunk_sums(segments, dtype)
+
+            parts = self._over_chunks(chunk if dtype != np.float64 else lambda segs: chunk_sums(segs, dtype))
+            if any(part is None for part in parts):
+                return None
+            return sum(G for G, _ in parts), sum(g for _, g in parts)
+
+        dtype = jacobian_dtype(model.n_params)
+        result = sums(dtype)
+        if dtype == np.float64 or result is None or all(np.all(np.isfinite(a)) for a in result):
+            return result
+        # Single precision ends at 3e38: a model far from its data (a start
+        # on badly scaled signals) can have sensitivities whose products
+        # overflow there and not in double precision; those normal
+        # equations are formed again in double precision.
+        return sums(np.float64)
 
 
 def _fold_start_states(G, g, start_states, n_sx):
