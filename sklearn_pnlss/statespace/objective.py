@@ -33,8 +33,9 @@ JACOBIAN_BLOCK_BYTES = 128 * 2**20
 
 # Above this many parameters the Jacobian blocks are held, and the Gram
 # matrix J^T J formed, in single precision: J^T J is then the bulk of an
-# iteration (rows times parameters squared), and single precision runs at
-# twice the BLAS rate in half the memory. The gradient J^T e is summed in
+# iteration (rows times parameters squared), and single precision runs
+# faster (F-16, 2,893 columns: 1.3 to 1.7 times the double-precision rate
+# on 2 cores) in half the memory. The gradient J^T e is summed in
 # double precision from the same rows, and every step is still accepted
 # or rejected on the cost in double precision: only the metric of the
 # step is rounded (to 1e-7 of the largest column, which the damping
@@ -224,11 +225,12 @@ class SimulationError:
 
         def sums(dtype):
             def chunk(segments):
-                # in each thread: numpy's error state is per thread
-                with np.errstate(over="ignore", invalid="ignore"):
+                if dtype == np.float64:
+                    return chunk_sums(segments, dtype)
+                with np.errstate(over="ignore", invalid="ignore"):  # set in each thread: it is per thread
                     return chunk_sums(segments, dtype)
 
-            parts = self._over_chunks(chunk if dtype != np.float64 else lambda segs: chunk_sums(segs, dtype))
+            parts = self._over_chunks(chunk)
             if any(part is None for part in parts):
                 return None
             return sum(G for G, _ in parts), sum(g for _, g in parts)
