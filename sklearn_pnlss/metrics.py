@@ -67,6 +67,14 @@ def rms_error(y_true, y_pred, db=False, skip=0):
 def _pooled(y_true, y_pred, skip=0):
     """All samples of all signals but the first ``skip`` of each,
     (n_total_samples, n_outputs), of both."""
+    true, pred = _signal_pairs(y_true, y_pred, skip)
+    skip = int(skip)
+    return np.concatenate([a[skip:] for a in true]), np.concatenate([b[skip:] for b in pred])
+
+
+def _signal_pairs(y_true, y_pred, skip=0):
+    """Both as lists of 2-D signals, checked to match in number and shapes
+    and to be longer than ``skip``."""
     true, _ = as_signal_list(y_true, name="y_true", min_samples=1)
     pred, _ = as_signal_list(y_pred, name="y_pred", min_samples=1)
     if len(true) != len(pred) or any(a.shape != b.shape for a, b in zip(true, pred)):
@@ -81,7 +89,7 @@ def _pooled(y_true, y_pred, skip=0):
             f"skip={skip} must be non-negative and shorter than every signal "
             f"(lengths {[a.shape[0] for a in true]})."
         )
-    return np.concatenate([a[skip:] for a in true]), np.concatenate([b[skip:] for b in pred])
+    return true, pred
 
 
 def nrmse(y_true, y_pred, skip=0):
@@ -146,9 +154,8 @@ def nrmse_by_band(y_true, y_pred, fs, edges, skip=0):
     edges = np.asarray(edges, dtype=float)
     if edges.ndim != 1 or edges.size < 2 or np.any(np.diff(edges) <= 0):
         raise ValueError(f"edges must be an increasing sequence of at least two frequencies; got {edges!r}.")
-    true, _ = as_signal_list(y_true, name="y_true", min_samples=1)
-    pred, _ = as_signal_list(y_pred, name="y_pred", min_samples=1)
-    _pooled(true, pred, skip)  # the same checks of shapes and skip
+    true, pred = _signal_pairs(y_true, y_pred, skip)
+    skip = int(skip)
     error_power = np.zeros((edges.size - 1, true[0].shape[1]))
     output_power = np.zeros(true[0].shape[1])
     for a, b in zip(true, pred):

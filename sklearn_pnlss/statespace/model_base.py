@@ -135,22 +135,24 @@ class StateSpaceModel:
         # None (an optional block left out) stays None
         return replace(self, **{f.name: np.copy(v) for f in fields(self) if (v := getattr(self, f.name)) is not None})
 
+    def _checked_run(self, U, x0=None):
+        """Outputs, states and final state from ``x0`` (zero by default);
+        raises :class:`DivergenceError` when the state leaves the range."""
+        x0 = np.zeros(self.n_states) if x0 is None else x0
+        Y, X, n_ok, x_end = self._run(np.ascontiguousarray(U), x0)
+        if n_ok < U.shape[0]:
+            raise DivergenceError(f"the simulation diverges at sample {n_ok}", sample=n_ok)
+        return Y, X, x_end
+
     def simulate(self, U, x0=None):
         """Output and final state from ``x0`` (zero by default); raises
         :class:`DivergenceError` when the state leaves the range."""
-        x0 = np.zeros(self.n_states) if x0 is None else x0
-        Y, _, n_ok, x_end = self._run(np.ascontiguousarray(U), x0)
-        if n_ok < U.shape[0]:
-            raise DivergenceError(f"the simulation diverges at sample {n_ok}", sample=n_ok)
+        Y, _, x_end = self._checked_run(U, x0)
         return Y, x_end
 
     def simulate_states(self, U, x0=None):
         """States (N, n) along the simulation from ``x0``."""
-        x0 = np.zeros(self.n_states) if x0 is None else x0
-        _, X, n_ok, _ = self._run(np.ascontiguousarray(U), x0)
-        if n_ok < U.shape[0]:
-            raise DivergenceError(f"the simulation diverges at sample {n_ok}", sample=n_ok)
-        return X
+        return self._checked_run(U, x0)[1]
 
     def steady_state_start(self, U_period, max_periods=200, rtol=1e-10):
         """State at the start of a period once the response is periodic:
@@ -167,9 +169,7 @@ class StateSpaceModel:
         U_period = np.ascontiguousarray(U_period)
         x = np.zeros(self.n_states)
         for _ in range(max_periods):
-            Y, X, n_ok, x_new = self._run(U_period, x)
-            if n_ok < U_period.shape[0]:
-                raise DivergenceError(f"the simulation diverges at sample {n_ok}", sample=n_ok)
+            Y, X, x_new = self._checked_run(U_period, x)
             if np.linalg.norm(x_new - x) <= rtol * (1.0 + np.linalg.norm(x_new)):
                 return x_new, Y, X
             x = x_new
@@ -184,10 +184,7 @@ class StateSpaceModel:
         if Y is not None and (k == 1 or np.array_equal(U.reshape(k, period, -1), np.broadcast_to(
                 U[:period], (k, period, U.shape[1])))):
             return np.tile(Y, (k, 1)), np.tile(X, (k, 1))
-        Y, X, n_ok, _ = self._run(np.ascontiguousarray(U), x0)
-        if n_ok < U.shape[0]:
-            raise DivergenceError(f"the simulation diverges at sample {n_ok}", sample=n_ok)
-        return Y, X
+        return self._checked_run(U, x0)[:2]
 
     def simulate_signal(self, U, period=None):
         """Simulate one signal; periodic steady state when ``period`` is

@@ -173,10 +173,10 @@ class SimulationError:
             G = np.zeros((n_par, n_par))
             products = {}  # J^T J work arrays by size and precision (weights give doubles)
 
-            def work(size, dtype):
-                if (size, dtype) not in products:
-                    products[size, dtype] = np.empty((size, size), dtype)
-                return products[size, dtype]
+            def work(size, precision):
+                if (size, precision) not in products:
+                    products[size, precision] = np.empty((size, size), precision)
+                return products[size, precision]
 
             g = np.zeros(n_par)
             buffers = {}  # one work array per column count, for the blocks of all segments
