@@ -8,6 +8,7 @@ from scipy.signal import lfilter
 from sklearn_pnlss import BLAEstimator, PNLSSRegressor
 from sklearn_pnlss.metrics import rms_error, signal_scorer
 from sklearn_pnlss.statespace.initial_state import estimate_initial_state
+from sklearn_pnlss.statespace.model_base import Segment
 from sklearn_pnlss.statespace.pnlss import PNLSSModel
 
 N = 4096
@@ -34,6 +35,26 @@ def test_a_state_is_recovered_from_a_short_window_of_a_nonlinear_model():
     Y = model.simulate(U, x_true)[0]
     x0 = estimate_initial_state(model, U, Y[:20])
     assert np.allclose(x0, x_true, atol=1e-7)
+
+
+def test_the_trusted_range_follows_the_trajectory_the_cost_simulates():
+    # A record that does not start from rest is simulated by the cost from
+    # the state its first samples show; the trusted range of the fitted
+    # nonlinearity (and the step basis) must be read along that trajectory,
+    # not one from rest, which a model can diverge on that the cost never
+    # saw diverge (EMPS's increments with a spline branch did).
+    ex = np.array([[2, 0, 0], [0, 1, 1], [3, 0, 0]])
+    model = PNLSSModel(A=np.array([[0.5, 0.3], [-0.3, 0.6]]), B=np.array([[1.0], [0.5]]),
+                       C=np.array([[1.0, 0.5]]), D=np.zeros((1, 1)),
+                       E=np.array([[0.05, 0.02, -0.01], [0.0, 0.03, 0.0]]), F=np.zeros((1, 0)),
+                       exE=ex, exF=np.zeros((0, 3), dtype=int))
+    U = np.random.default_rng(1).standard_normal((200, 1))
+    x_true = np.array([0.7, -0.4])
+    Y = model.simulate(U, x_true)[0]
+    seg = Segment(U, Y, 0, init_window=20)
+    path = model.segments_trajectory([seg])
+    assert np.allclose(path[0, :2], x_true, atol=1e-7) and np.array_equal(path[:, 2:], U)
+    assert np.allclose(path[:, :2], model.simulate_states(U, x_true), atol=1e-6)
 
 
 def test_a_record_cut_from_a_run_is_simulated_from_its_state():

@@ -179,12 +179,12 @@ def frequency_weight(Xn, yn, settings):
 
 def trusted_model(model, segments, settings):
     """``model`` (normalised) with the trusted range of its nonlinearity
-    along its simulation of the training ``segments`` (from rest, as the
-    cost simulates them), continued outside it as
+    along its simulation of the training ``segments`` (each from the state
+    the cost starts it from), continued outside it as
     ``settings.extrapolation`` says."""
     if settings.extrapolation == "polynomial":
         return model.without_bounds()
-    trusted = model.with_trusted_range(model.trajectory([seg.U for seg in segments]), settings.range_margin)
+    trusted = model.with_trusted_range(model.segments_trajectory(segments), settings.range_margin)
     return replace(trusted, linear_extrapolation=True) if settings.extrapolation == "linear" else trusted
 
 
@@ -269,7 +269,7 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
         if stage == 0:
             callback(0, theta, float(e0 @ e0), np.nan)
         current = model.with_theta(theta)
-        basis = current.step_basis(current.trajectory([seg.U for seg in objective.segments]))
+        basis = current.step_basis(current.segments_trajectory(objective.segments))
         # BLAS threads as configured here (one thread below a threshold
         # moved EMPS's PNLSS model of the increments from 3.39 to 10.4 mm
         # on its test split by round-off alone: that fit is fragile)

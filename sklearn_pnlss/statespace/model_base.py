@@ -205,6 +205,15 @@ class StateSpaceModel:
         region the model operates in on those inputs."""
         return np.vstack([self.states_inputs(U, period) for U in U_list])
 
+    def segments_trajectory(self, segments):
+        """``[x; u]`` along each training segment's simulation from the state
+        the cost starts it from (:meth:`segment_start`), stacked: the region
+        the fitted model operates in. From rest instead, a model can diverge
+        that the cost never saw diverge (EMPS's increments, a spline branch
+        whose edge slope pulls outwards: at sample 7,759 of 24,841)."""
+        return np.vstack([np.hstack([self.simulate_states(seg.U, self.segment_start(seg)), seg.U])
+                          for seg in segments])
+
     def range_excursion(self, U, period=None):
         """How far the simulation of ``U`` (periodic steady state with
         ``period``) takes the nonlinearity's variables past their trusted
