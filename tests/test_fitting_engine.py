@@ -96,6 +96,23 @@ def test_trusted_range_is_the_training_range_widened_by_the_margin():
     assert np.all(np.isinf(plain.bounds))
 
 
+def test_the_trusted_range_reuses_the_last_residual_simulations():
+    X, y = _signals(0)
+    truth = _unit(_truth())
+    settings = FitSettings(period=PERIOD)
+    objective = simulation_objectives(truth, X, y, settings)[0]
+    model = truth.normalised
+    other = model.with_theta(model.theta * 1.01)
+    objective.residual(model)
+    reused = objective.trajectory(model)
+    assert np.array_equal(reused, model.segments_trajectory(objective.segments))
+    # another model's trajectory is simulated anew, not taken from the cache
+    assert np.array_equal(objective.trajectory(other), other.segments_trajectory(objective.segments))
+    assert not np.array_equal(objective.trajectory(other), reused)
+    assert np.array_equal(trusted_model(model, objective.segments, settings, objective).bounds,
+                          trusted_model(model, objective.segments, settings).bounds)
+
+
 def test_a_diverging_start_is_refused():
     X, y = _signals(0)
     unstable = _truth()

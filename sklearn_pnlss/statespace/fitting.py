@@ -177,14 +177,17 @@ def frequency_weight(Xn, yn, settings):
     return lambda n_averaged: in_band * n_averaged / var
 
 
-def trusted_model(model, segments, settings):
+def trusted_model(model, segments, settings, objective=None):
     """``model`` (normalised) with the trusted range of its nonlinearity
     along its simulation of the training ``segments`` (each from the state
     the cost starts it from), continued outside it as
-    ``settings.extrapolation`` says."""
+    ``settings.extrapolation`` says. ``objective``: the SimulationError of
+    those segments, whose last simulations are reused when they were of
+    ``model``."""
     if settings.extrapolation == "polynomial":
         return model.without_bounds()
-    trusted = model.with_trusted_range(model.segments_trajectory(segments), settings.range_margin)
+    path = model.segments_trajectory(segments) if objective is None else objective.trajectory(model)
+    trusted = model.with_trusted_range(path, settings.range_margin)
     return replace(trusted, linear_extrapolation=True) if settings.extrapolation == "linear" else trusted
 
 
@@ -231,7 +234,7 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
     def validation_error(theta):
         if validation is None:
             return np.nan
-        cand = trusted_model(model.with_theta(theta), segments, settings)
+        cand = trusted_model(model.with_theta(theta), segments, settings, stage_objective[0])
         err, inputs = [], []
         for U, Y in zip(*validation):
             per, Un = settings.period_of(U), start.normalise_inputs(U)
@@ -261,7 +264,9 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
             print(msg + (f"  validation {v:8.2f} dB" if validation is not None else ""), flush=True)
 
     theta = model.theta
+    stage_objective = [objectives[0]]  # the stage running, whose simulations the callback reuses
     for stage, objective in enumerate(objectives):
+        stage_objective[0] = objective
         n_res = sum(seg.Y.size for seg in objective.segments)
         e0 = objective.residual(model.with_theta(theta))
         if e0 is None:
@@ -269,7 +274,7 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
         if stage == 0:
             callback(0, theta, float(e0 @ e0), np.nan)
         current = model.with_theta(theta)
-        basis = current.step_basis(current.segments_trajectory(objective.segments))
+        basis = current.step_basis(objective.trajectory(current))
         # BLAS threads as configured here (one thread below a threshold
         # moved EMPS's PNLSS model of the increments from 3.39 to 10.4 mm
         # on its test split by round-off alone: that fit is fragile)
@@ -283,7 +288,7 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
         done += result.n_iter
     keep, best_it = (best["theta"], best["it"]) if validation is not None else (theta, done)
     return LMFit(
-        model=start.with_normalised(trusted_model(model.with_theta(keep), segments, settings)),
+        model=start.with_normalised(trusted_model(model.with_theta(keep), segments, settings, objective)),
         n_iter=done, best_iteration=best_it,
         cost_history=np.array([h[1] for h in result.history]),
         validation_history=np.array(val_history) if validation is not None else None,

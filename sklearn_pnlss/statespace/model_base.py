@@ -250,11 +250,18 @@ class StateSpaceModel:
     def segment_error(self, seg, start=None):
         """Simulation error (T, p) on one segment, or None when it diverges;
         ``start``: its :meth:`segment_start`, when already read."""
+        run = self.segment_run(seg, start)
+        return None if run is None else run[0]
+
+    def segment_run(self, seg, start=None):
+        """``(error, states)`` of one segment's simulation: the error (T, p)
+        and the states along all of ``seg.U`` (as :meth:`segments_trajectory`
+        reads them); None when it diverges."""
         start = self.segment_start(seg) if start is None else start
-        Y, _, n_ok, _ = self._run(np.ascontiguousarray(seg.U), start)
+        Y, X, n_ok, _ = self._run(np.ascontiguousarray(seg.U), start)
         if n_ok < seg.U.shape[0]:
             return None
-        return Y[seg.n_skip :] - seg.Y
+        return Y[seg.n_skip :] - seg.Y, X
 
     @property
     def n_state_params(self):

@@ -113,10 +113,11 @@ class SimulationError:
     def __init__(self, segments, n_threads=1):
         self.segments = segments
         self.n_threads = max(1, min(int(n_threads), len(segments)))
-        # The last residual's simulations: Levenberg-Marquardt asks for the
-        # normal equations at the step it has just accepted, whose error the
-        # trial simulated already (a simulation per iteration saved; a
-        # tenth of the 10-iteration Bouc-Wen fit).
+        # The last residual's simulations (start, error, states):
+        # Levenberg-Marquardt asks for the normal equations at the step it
+        # has just accepted, whose error the trial simulated already (a
+        # simulation per iteration saved; a tenth of the 10-iteration
+        # Bouc-Wen fit), and for its trusted range (see trajectory).
         self._simulated = (None, {})
 
     def _over_chunks(self, function):
@@ -140,10 +141,11 @@ class SimulationError:
             out = []
             for seg in segments:
                 start = model.segment_start(seg)
-                err = model.segment_error(seg, start)
-                if err is None or not np.all(np.isfinite(err)):
+                run = model.segment_run(seg, start)
+                if run is None or not np.all(np.isfinite(run[0])):
                     return None
-                simulated[id(seg)] = start, err
+                err = run[0]
+                simulated[id(seg)] = start, err, run[1]
                 out.append(weigh(seg, err[:, :, None]).ravel())
             return out
 
@@ -152,6 +154,18 @@ class SimulationError:
             return None
         self._simulated = (_key(model), simulated)
         return np.concatenate([e for p in parts for e in p])
+
+    def trajectory(self, model):
+        """``model.segments_trajectory`` of the segments, from the last
+        residual's simulations when they were of this model: the trusted
+        range of each accepted iterate, and the step basis of each stage,
+        are read along the trajectory its residual has just simulated (a
+        decoupled Bouc-Wen fit with validation simulated its training
+        segments a second time per iteration: 12 % of the fit)."""
+        key, simulated = self._simulated
+        if key == _key(model) and all(id(seg) in simulated for seg in self.segments):
+            return np.vstack([np.hstack([simulated[id(seg)][2], seg.U]) for seg in self.segments])
+        return model.segments_trajectory(self.segments)
 
     def normal_equations(self, model):
         """J^T J and J^T e of the weighted residual at ``model``, or None when
@@ -183,7 +197,7 @@ class SimulationError:
             start_states = []  # per steady segment: what its start state folds in
             for seg in segments:
                 if id(seg) in known:
-                    start, err = known[id(seg)]
+                    start, err, _ = known[id(seg)]
                 else:
                     start = model.segment_start(seg)  # read once for the error and its Jacobian
                     err = model.segment_error(seg, start)
