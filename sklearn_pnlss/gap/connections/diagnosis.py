@@ -21,7 +21,10 @@ import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
-from ...utils.parameters import Interval, validates_parameters
+from ...physics.structure import Structure
+from ...utils.parameters import Interval, Options, validates_parameters
+from ...utils.validation import as_signal_list
+from ..modal_nominal import modal_nominal
 from .locator import ConnectionLocator, band_and_weights
 from .recalibrate import recalibrated
 from .refine import BandError, fit_connection
@@ -155,9 +158,14 @@ class StructuralGapDiagnosis(BaseEstimator):
 
     Parameters
     ----------
-    nominal : Structure
+    nominal : Structure or "modal"
         The linear simulator (e.g. :func:`~sklearn_pnlss.gap.modal_nominal`
-        of the lowest level).
+        of the lowest level); "modal": a structure with only test data, its
+        modes read off the training records themselves, at the lowest and
+        at the highest level, whichever leaves the locator less to explain
+        (a joint that sticks at low levels hides its own flexibility there:
+        its modes show only once it slips; one sensor per point, of one
+        kind, the single input at a sensed point).
     fs : float
         Sampling rate, Hz.
     period : int
@@ -191,8 +199,15 @@ class StructuralGapDiagnosis(BaseEstimator):
 
     Attributes
     ----------
+    reference_ : Structure
+        The linear structure the diagnosis starts from: ``nominal``, or the
+        modes read off the training record ``modal_record_``.
+    modal_record_ : int or None
+        With ``nominal="modal"``, the training record whose modes are the
+        reference.
     nominal_ : Structure
-        The nominal the connections are added to (recalibrated or given).
+        The nominal the connections are added to (the reference,
+        recalibrated or as it is).
     locator_ : ConnectionLocator
     fits_ : list of ConnectionFit
         Every simulated law, least training error first.
@@ -247,6 +262,7 @@ class StructuralGapDiagnosis(BaseEstimator):
 
     _parameter_constraints = {
         **{k: v for k, v in ConnectionLocator._parameter_constraints.items() if k != "linear_corrections"},
+        "nominal": [Structure, Options(str, {"modal"})],
         "n_places": [Interval(Integral, 1, None, closed="left")],
         "oversampling": [Interval(Integral, 1, None, closed="left")],
         "max_nfev": [Interval(Integral, 1, None, closed="left")],
@@ -282,11 +298,15 @@ class StructuralGapDiagnosis(BaseEstimator):
         -------
         self : StructuralGapDiagnosis
         """
-        spectra = self._locator(self.nominal)._spectra(X, y)  # checked and read once for every round
-        self.nominal_, self.updated_elements_ = self.nominal, None
-        if self.recalibrate:
-            self.nominal_ = self._recalibrated(spectra)
-        self.locator_ = self._locator(self.nominal_)._fit_spectra(spectra)
+        spectra = self._locator(None)._spectra(X, y)  # checked and read once for every round
+        located = []
+        for record, reference in self._references(X, y, spectra):
+            nominal, updated = self._recalibrated(spectra, reference) if self.recalibrate else (reference, None)
+            located.append((self._locator(nominal)._fit_spectra(spectra), reference, record, updated))
+        # the reference whose best connection leaves the least error (the
+        # same records, the same noise weights: comparable)
+        self.locator_, self.reference_, self.modal_record_, self.updated_elements_ = min(
+            located, key=lambda entry: entry[0].unexplained_)
         for _ in range(CORRECTION_ROUNDS - 1):
             corrections = self.locator_.best_.corrections
             if corrections is None or np.max(np.abs(corrections), initial=0.0) < CORRECTION_TOL:
@@ -303,7 +323,7 @@ class StructuralGapDiagnosis(BaseEstimator):
             self.locator_ = again
         self.nominal_ = self.locator_.nominal
         error = self._band_error(spectra)
-        self.nominal_train_error_ = error.relative(error.simulate(self.nominal))
+        self.nominal_train_error_ = error.relative(error.simulate(self.reference_))
         self.recalibrated_train_error_ = error.relative(error.simulate(self.nominal_))
         places = list(dict.fromkeys(c.place for c in self.locator_.ranking_))[:self.n_places]
         fits, self.linear_ = [], {}
@@ -361,12 +381,44 @@ class StructuralGapDiagnosis(BaseEstimator):
                            seconds=fit.seconds + joint.seconds)
         return fit
 
-    def _recalibrated(self, spectra):
-        """The nominal updated on the best linear approximation of the
+    def _references(self, X, y, spectra):
+        """``(record, structure)`` pairs the diagnosis may start from:
+        ``(None, nominal)``, or with ``nominal="modal"`` the modes read off
+        the lowest and the highest training record (by input rms; one that
+        shows no mode a structure can have is left out)."""
+        if not isinstance(self.nominal, str):
+            return [(None, self.nominal)]
+        points = [point for point, _ in self.sensors]
+        kinds = {kind for _, kind in self.sensors}
+        if len(set(points)) != len(points) or len(kinds) != 1 or len(self.inputs) != 1 \
+                or self.inputs[0] not in points:
+            raise ValueError("nominal='modal' reads the modes off one force at a sensed point, with one sensor per "
+                             f"point, all of one kind; got inputs {list(self.inputs)} and sensors "
+                             f"{list(self.sensors)}. Pass a Structure as nominal instead.")
+        skip = self.transient_periods * self.period
+        X_list = [u[skip:] for u in as_signal_list(X, name="X")[0]]
+        y_list = [v[skip:] for v in as_signal_list(y, name="y")[0]]
+        size = np.sqrt(np.mean(np.abs(spectra.U) ** 2, axis=(1, 2)))
+        references, reasons = [], []
+        for record in dict.fromkeys([int(np.argmin(size)), int(np.argmax(size))]):
+            try:
+                references.append((record, modal_nominal(X_list[record], y_list[record], fs=self.fs, points=points,
+                                                         driving_point=self.inputs[0], kind=self.sensors[0][1],
+                                                         period=self.period, f_band=self.f_band)))
+            except ValueError as exc:
+                reasons.append(f"record {record}: {exc}")
+        if not references:
+            raise ValueError("nominal='modal': no training record shows modes to start from (" + "; ".join(reasons)
+                             + "). Pass a Structure as nominal.")
+        return references
+
+    def _recalibrated(self, spectra, nominal):
+        """``nominal`` updated on the best linear approximation of the
         lowest training level, the records closest to linear: a lumped
         nominal's masses, springs and modal damping ratios (see
         :mod:`~sklearn_pnlss.gap.connections.update`), a modal one's in-band
-        modes (see :mod:`~sklearn_pnlss.gap.connections.recalibrate`)."""
+        modes (see :mod:`~sklearn_pnlss.gap.connections.recalibrate`); and
+        the lumped update's factors (None for a modal nominal)."""
         if spectra.U.shape[2] != 1:
             raise ValueError("recalibrate=True reads the frequency response of one input force; with "
                              f"{spectra.U.shape[2]} inputs pass recalibrate=False.")
@@ -379,12 +431,10 @@ class StructuralGapDiagnosis(BaseEstimator):
         excited = power > 1e-6 * power.max()
         frf = np.sum(Y[:, excited] * U[:, excited, None].conj(), axis=0) / power[excited, None]
         freqs = spectra.freqs[lines][excited]
-        if ElementUpdate.of(self.nominal) is not None:
-            updated, self.updated_elements_ = updated_elements(self.nominal, freqs, frf[:, :, None], weights,
-                                                               fs=self.fs, inputs=self.inputs,
-                                                               sensors=self.sensors)
-            return updated
-        return recalibrated(self.nominal, freqs, frf[:, :, None], weights, inputs=self.inputs, sensors=self.sensors)
+        if ElementUpdate.of(nominal) is not None:
+            return updated_elements(nominal, freqs, frf[:, :, None], weights, fs=self.fs, inputs=self.inputs,
+                                    sensors=self.sensors)
+        return recalibrated(nominal, freqs, frf[:, :, None], weights, inputs=self.inputs, sensors=self.sensors), None
 
     def _locator(self, nominal):
         return ConnectionLocator(nominal, fs=self.fs, period=self.period, inputs=self.inputs, sensors=self.sensors,
@@ -410,7 +460,7 @@ class StructuralGapDiagnosis(BaseEstimator):
         check_is_fitted(self, "best_")
         error = self._band_error(self.locator_._spectra(X, y))
         nominal, recalibrated, connection, linear = (_simulated(error, s) for s in (
-            self.nominal, self.nominal_, self.best_.structure, self.linear_[self.best_.place].structure))
+            self.reference_, self.nominal_, self.best_.structure, self.linear_[self.best_.place].structure))
         e0, e1 = error.relative(nominal), error.relative(connection)
         noise = np.sum(error.spectra.Y_noise[:, error.lines] * error.weights**2, axis=(1, 2))
         left = np.sum(np.abs(connection - error.measured) ** 2, axis=(1, 2))
