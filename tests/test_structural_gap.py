@@ -82,6 +82,14 @@ def test_a_cubic_spring_is_found_from_a_nominal_read_off_the_lowest_level():
     assert report.law == "cubic_stiffness" and np.all(report.closure > 0.9)
 
 
+def test_modes_read_off_the_records_need_the_force_at_a_sensed_point():
+    rng = np.random.default_rng(0)
+    X, Y = rng.standard_normal((2, 2 * PERIOD, 1)), rng.standard_normal((2, 2 * PERIOD, 2))
+    gap = StructuralGapDiagnosis("modal", fs=FS, period=PERIOD, inputs=["base"], sensors=SENSORS[1:])
+    with pytest.raises(ValueError, match="nominal='modal' reads the modes off one force at a sensed point"):
+        gap.fit(X, Y)
+
+
 @pytest.mark.slow
 def test_the_f16s_diagnosis_by_the_benchmark_protocol(f16_dir):
     """The F-16 (real data, ``benchmarks/bench_f16_gap.py``): nominal read
