@@ -24,15 +24,21 @@ def _record(offset_u=0.0, offset_y=0.0, seed=0):
     return (offset_u + u[:N], offset_y + y[:N]), (offset_u + u[2 * N:], offset_y + y[2 * N:])
 
 
-def test_a_state_is_recovered_from_a_short_window_of_a_nonlinear_model():
-    ex = np.array([[2, 0, 0], [0, 1, 1], [3, 0, 0]])  # x1^2, x2 u, x1^3
+def _started_record():
+    """A two-state nonlinear model (x1^2, x2 u, x1^3) and 200 samples of
+    its output from the state ``x_true``, not from rest."""
+    ex = np.array([[2, 0, 0], [0, 1, 1], [3, 0, 0]])
     model = PNLSSModel(A=np.array([[0.5, 0.3], [-0.3, 0.6]]), B=np.array([[1.0], [0.5]]),
                        C=np.array([[1.0, 0.5]]), D=np.zeros((1, 1)),
                        E=np.array([[0.05, 0.02, -0.01], [0.0, 0.03, 0.0]]), F=np.zeros((1, 0)),
                        exE=ex, exF=np.zeros((0, 3), dtype=int))
     U = np.random.default_rng(1).standard_normal((200, 1))
     x_true = np.array([0.7, -0.4])
-    Y = model.simulate(U, x_true)[0]
+    return model, U, x_true, model.simulate(U, x_true)[0]
+
+
+def test_a_state_is_recovered_from_a_short_window_of_a_nonlinear_model():
+    model, U, x_true, Y = _started_record()
     x0 = estimate_initial_state(model, U, Y[:20])
     assert np.allclose(x0, x_true, atol=1e-7)
 
@@ -43,14 +49,7 @@ def test_the_trusted_range_follows_the_trajectory_the_cost_simulates():
     # nonlinearity (and the step basis) must be read along that trajectory,
     # not one from rest, which a model can diverge on that the cost never
     # saw diverge (EMPS's increments with a spline branch did).
-    ex = np.array([[2, 0, 0], [0, 1, 1], [3, 0, 0]])
-    model = PNLSSModel(A=np.array([[0.5, 0.3], [-0.3, 0.6]]), B=np.array([[1.0], [0.5]]),
-                       C=np.array([[1.0, 0.5]]), D=np.zeros((1, 1)),
-                       E=np.array([[0.05, 0.02, -0.01], [0.0, 0.03, 0.0]]), F=np.zeros((1, 0)),
-                       exE=ex, exF=np.zeros((0, 3), dtype=int))
-    U = np.random.default_rng(1).standard_normal((200, 1))
-    x_true = np.array([0.7, -0.4])
-    Y = model.simulate(U, x_true)[0]
+    model, U, x_true, Y = _started_record()
     seg = Segment(U, Y, 0, init_window=20)
     path = model.segments_trajectory([seg])
     assert np.allclose(path[0, :2], x_true, atol=1e-7) and np.array_equal(path[:, 2:], U)
