@@ -234,7 +234,9 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
     def validation_error(theta):
         if validation is None:
             return np.nan
-        cand = trusted_model(model.with_theta(theta), segments, settings, stage_objective[0])
+        # the running stage's objective (bound when the callback runs):
+        # its last simulations are this iterate's
+        cand = trusted_model(model.with_theta(theta), segments, settings, objective)
         err, inputs = [], []
         for U, Y in zip(*validation):
             per, Un = settings.period_of(U), start.normalise_inputs(U)
@@ -264,9 +266,7 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
             print(msg + (f"  validation {v:8.2f} dB" if validation is not None else ""), flush=True)
 
     theta = model.theta
-    stage_objective = [objectives[0]]  # the stage running, whose simulations the callback reuses
     for stage, objective in enumerate(objectives):
-        stage_objective[0] = objective
         n_res = sum(seg.Y.size for seg in objective.segments)
         e0 = objective.residual(model.with_theta(theta))
         if e0 is None:

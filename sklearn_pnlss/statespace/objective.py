@@ -144,8 +144,8 @@ class SimulationError:
                 run = model.segment_run(seg, start)
                 if run is None or not np.all(np.isfinite(run[0])):
                     return None
-                err = run[0]
-                simulated[id(seg)] = start, err, run[1]
+                err, states = run
+                simulated[id(seg)] = start, err, states
                 out.append(weigh(seg, err[:, :, None]).ravel())
             return out
 
