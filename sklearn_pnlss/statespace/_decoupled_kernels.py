@@ -22,6 +22,12 @@ all parameters at once. As in :mod:`._pnlss_kernels`, the loops are written
 out (no ``@`` on small arrays, which would allocate at every sample) and the
 powers ``z ** k`` are built by repeated multiplication (no ``pow`` calls).
 
+Polynomial branches pass ``knots=None`` (and ``B0=None``): numba compiles
+the kernels once per argument type and drops the spline code from the
+polynomial ones. Chosen at run time by a flag instead, the spline code
+alone (never run) made the simulation of a 3-branch, degree-6 model 4.6
+times slower (170 against 37 ns a sample) and its Jacobian 1.5 times.
+
 The small inline helpers (``_affine`` ...) are defined here again rather than
 imported from :mod:`._pnlss_kernels`: numba's on-disk cache checks only the
 source file of the cached function, so a helper changed in another module
@@ -93,11 +99,11 @@ def _spline_at(G, b, knots, B0, zc, zp, dzp):
 
 
 @_jit
-def _branches(V, G, lo, hi, linear, spline, knots, B0, s, zp, dzp, g, dg):
+def _branches(V, G, lo, hi, linear, knots, B0, s, zp, dzp, g, dg):
     """Branch values ``g``, their derivatives ``dg`` with respect to the
     branch input, and ``zp[b, k]``, the derivative of ``g_b`` with respect to
     ``G[b, k]``, at ``z = V^T s`` (continued outside ``[lo, hi]``);
-    polynomial branches, or splines (``spline``) on ``knots`` (r, 2)
+    polynomial branches (``knots`` None), or splines on ``knots`` (r, 2)
     with offsets ``B0`` (r, d). ``dzp`` (d,) is scratch."""
     r, d = G.shape
     for b in range(r):
@@ -105,7 +111,7 @@ def _branches(V, G, lo, hi, linear, spline, knots, B0, s, zp, dzp, g, dg):
         for j in range(s.shape[0]):
             z += V[j, b] * s[j]
         zc = min(max(z, lo[b]), hi[b])  # the point the branch is evaluated at
-        if spline:
+        if knots is not None:  # pruned when compiled for polynomials
             val, der = _spline_at(G, b, knots, B0, zc, zp, dzp)
         else:
             val, der = _polynomial_at(G, b, zc, zp, dzp)
@@ -163,7 +169,7 @@ def _branch_direct(w, dg, s, zp, oV, oG, row):
 
 
 @numba.njit(cache=True, nogil=True)
-def decoupled_simulate(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, spline, knots, B0, U, x0):
+def decoupled_simulate(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, knots, B0, U, x0):
     """Simulate; returns (Y, X, n_ok, x_end). n_ok < len(U) means the state
     left the range (divergence) after sample n_ok - 1."""
     N, m = U.shape
@@ -181,7 +187,7 @@ def decoupled_simulate(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, spline, knots, 
     x_next = np.empty(n)
     for t in range(N):
         _stack(x, U[t], s)
-        _branches(V, G, lo, hi, linear, spline, knots, B0, s, zp, dzp, g, dg)
+        _branches(V, G, lo, hi, linear, knots, B0, s, zp, dzp, g, dg)
         X[t] = x
         _affine(C, x, D, U[t], Wy, g, Y[t])
         _affine(A, x, B, U[t], Wx, g, x_next)
@@ -193,7 +199,7 @@ def decoupled_simulate(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, spline, knots, 
 
 
 @numba.njit(cache=True, nogil=True)
-def decoupled_jacobian(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, spline, knots, B0, U, x, Sx, n_skip,
+def decoupled_jacobian(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, knots, B0, U, x, Sx, n_skip,
                        out_branch_params, J):
     """Output sensitivities dy(t)/dtheta for t >= n_skip, written to
     J[(t - n_skip), :, :] (shape (N - n_skip, p, n_theta)). ``Wy`` is a
@@ -232,7 +238,7 @@ def decoupled_jacobian(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, spline, knots, 
     for t in range(N):
         u = U[t]
         _stack(x_now, u, s)
-        _branches(V, G, lo, hi, linear, spline, knots, B0, s, zp, dzp, g, dg)
+        _branches(V, G, lo, hi, linear, knots, B0, s, zp, dzp, g, dg)
         _linearised(A, Wx, dg, V, Ax)
         if t >= n_skip:
             _linearised(C, Wy, dg, V, Cx)

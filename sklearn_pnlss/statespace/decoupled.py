@@ -202,13 +202,13 @@ class DecoupledModel(StateSpaceModel):
     def _branch_arguments(self):
         """What the kernels take to evaluate the branches: the trusted
         range, the continuation, and the splines' knots and offsets
-        ``B_k(0)`` (zeros for polynomials)."""
+        ``B_k(0)`` (None for polynomials: the kernels are then compiled
+        without the spline code, see :mod:`._decoupled_kernels`)."""
         lo, hi = self._bounds()
-        r, d = self.G.shape
         if not self.splines:
-            return lo, hi, self.linear_extrapolation, False, np.zeros((r, 2)), np.zeros((r, d))
-        B0 = np.vstack([cubic_bspline_basis(0.0, k, d)[0] for k in self.knots])
-        return lo, hi, self.linear_extrapolation, True, self.knots, B0
+            return lo, hi, self.linear_extrapolation, None, None
+        B0 = np.vstack([cubic_bspline_basis(0.0, k, self.degree)[0] for k in self.knots])
+        return lo, hi, self.linear_extrapolation, self.knots, B0
 
     def _run(self, U, x0):
         return decoupled_simulate(
