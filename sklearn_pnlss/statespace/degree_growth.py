@@ -12,7 +12,7 @@ import numpy as np
 from .fitting import LMFit, optimise
 from .pnlss import PNLSSModel
 
-__all__ = ["degree_stages", "optimise_growing_degrees", "with_degrees"]
+__all__ = ["chain_stages", "degree_stages", "optimise_growing_degrees", "with_degrees"]
 
 
 def degree_stages(degrees, grow):
@@ -96,10 +96,10 @@ def optimise_growing_degrees(start, objectives, settings, stages, validation=Non
                        max_iter=settings.max_iter if last else settings.max_iter // 2)
         fits.append(fit)
         previous = fit.model.normalised
-    return _chain_stages(fits)
+    return chain_stages(fits)
 
 
-def _chain_stages(fits):
+def chain_stages(fits):
     """One LMFit from consecutive stages, each starting where the previous
     ended: iterations and validation history run on across the stages."""
     if len(fits) == 1:
