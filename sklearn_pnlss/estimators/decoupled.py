@@ -96,10 +96,11 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         ``degree``, the added coefficients starting at zero, for the rest.
         A random start of a high degree often stays on the linear model's
         plateau; grown from a low degree, the branches first capture the
-        main nonlinearity. On WH2009 (2 branches of degree 21, 300
-        iterations, 4 starts) every start grown from degree 7 left the
-        plateau, against 2 of 8 started at degree 21 (see the user guide's
-        decoupling page). None: all of ``degree`` from the start.
+        main nonlinearity. On a Wiener-Hammerstein system with a knee (one
+        branch of degree 21, 4 starts) every start grown from degree 7
+        leaves the plateau, 1 of 4 started at degree 21; on WH2009 three
+        branches grown so reach 0.275 mV on the test record (see the user
+        guide's decoupling page). None: all of ``degree`` from the start.
     n_init : int, default=5
         Starts from different random sampling points and CPD starts
         (``init="cpd"``) or different random directions (``"random"``).
