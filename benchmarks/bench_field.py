@@ -93,6 +93,9 @@ SETUPS = {
                    pnlss={"degrees": (2, 3), "variables": "states_inputs", "equations": "both", "max_iter": 400,
                           "n_jobs": 2},
                    decoupled={"Decoupled PNLSS from the BLA": DECOUPLED_WH,
+                              # other draws of the random starts: the figure's spread
+                              **{f"Decoupled PNLSS from the BLA, random_state={k}": {**DECOUPLED_WH, "random_state": k}
+                                 for k in (1, 2)},
                               "Decoupled PNLSS, 2 branches of degree 21 from the start": DECOUPLED_WH_AT_ONCE}),
     "cascaded_tanks": dict(n=2, fs=0.25, offsets=True,
                            pnlss={"degrees": (2, 3), "variables": "states", "equations": "both", "max_iter": 400},

@@ -543,6 +543,12 @@ def _family_s_median(nominal):
                              if "ok" in r and r["nominal"] == nominal)
 
 
+def _wh_other_draws():
+    """WH2009's decoupled model on the other draws of its random starts
+    (test rms error, mV)."""
+    return [_field("wh2009", f"{WH_DECOUPLED[1]}, random_state={k}")["test_rmse"] for k in (1, 2)]
+
+
 def _left_plateau(row):
     """(starts that left the linear model's plateau, starts) of a field
     benchmark row: WH2009's linear start costs 37 dB, and a start that
@@ -593,12 +599,12 @@ FIELD_FIGURES = [
                     _field("wh2009", "PNLSS")["fit_s"], _published("wh2009", "PNLSS (Paduart et al. 2012)"),
                     _published("wh2009", "DT SUBNET (best)")]),
     Figure(R, "| WH2009 | `DecoupledPNLSSRegressor(6, n_branches=3, degree=21, start_degree=7, init=\"random\", "
-              "output_branches=True)` after the BLA, 4 starts, 300 iterations: 154 parameters | 0.275 mV | 268 s | "
-              "PNLSS 0.42 mV, best 0.241 mV |", FIELD,
+              "output_branches=True)` after the BLA, 4 starts, 300 iterations: 154 parameters (other draws of the "
+              "starts: 0.315, 0.366 mV) | 0.275 mV | 268 s | PNLSS 0.42 mV, best 0.241 mV |", FIELD,
            lambda: [6, _field(*WH_DECOUPLED)["settings"]["n_branches"], _field(*WH_DECOUPLED)["settings"]["degree"],
                     _field(*WH_DECOUPLED)["settings"]["start_degree"],
                     _field(*WH_DECOUPLED)["settings"]["n_init"], _field(*WH_DECOUPLED)["settings"]["max_iter"],
-                    _field(*WH_DECOUPLED)["n_params"], _field(*WH_DECOUPLED)["test_rmse"],
+                    _field(*WH_DECOUPLED)["n_params"], *_wh_other_draws(), _field(*WH_DECOUPLED)["test_rmse"],
                     _field(*WH_DECOUPLED)["fit_s"], _published("wh2009", "PNLSS (Paduart et al. 2012)"),
                     _published("wh2009", "DT SUBNET (best)")]),
     Figure(R, "| cascaded tanks | `BLAEstimator(2, offsets=True)` | 0.664 V | 0.2 s | |", FIELD,
@@ -639,6 +645,10 @@ FIELD_FIGURES = [
                     _field(*WH_DECOUPLED)["settings"]["max_iter"], _field(*WH_DECOUPLED)["test_rmse"],
                     _field(*WH_DECOUPLED)["fit_s"], _field(*WH_DECOUPLED)["n_params"], _field("wh2009", "PNLSS")["n_params"],
                     100 * (_field(*WH_DECOUPLED)["test_rmse"] / _published("wh2009", "DT SUBNET (best)") - 1)]),
+    Figure(PN, "other\n  draws of the random starts (``random_state=1, 2``) end at 0.315 and\n  0.366 mV, so the 0.30 mV "
+               "this benchmark's target asks for is reached on\n  one draw of three", FIELD,
+           lambda: [1, 2, *_wh_other_draws(), 0.30]
+           if sum(v <= 0.30 for v in [_field(*WH_DECOUPLED)["test_rmse"], *_wh_other_draws()]) == 1 else [-1]),
     Figure(PN, "two branches of degree\n  21 from the start end at 0.387 mV (2 of 4 starts left the plateau)", FIELD,
            lambda: [_field(*WH_AT_ONCE)["settings"]["degree"], _field(*WH_AT_ONCE)["test_rmse"],
                     *_left_plateau(WH_AT_ONCE)] if _field(*WH_AT_ONCE)["settings"]["n_branches"] == 2 else [-1]),
@@ -648,9 +658,9 @@ FIELD_FIGURES = [
     Figure(DEC, "(one branch of degree\n21, four starts of 60 iterations; ``tests/test_decoupled.py``), every\nstart "
                 "grown from degree 7", "tests/test_decoupled.py::test_start_degree_grows_random_branches_off_the_plateau",
            lambda: [21, 60, 7]),
-    Figure(DEC, "On WH2009 three branches grown so reach 0.275 mV on the test\nrecord, two of degree 21 from the start "
-                "0.387 mV", FIELD,
-           lambda: [_field(*WH_DECOUPLED)["test_rmse"], _field(*WH_AT_ONCE)["settings"]["degree"],
+    Figure(DEC, "On WH2009 three branches grown so reach 0.275 to 0.366 mV on the\ntest record over three draws of "
+                "the starts, two of degree 21 from the\nstart 0.387 mV", FIELD,
+           lambda: [_field(*WH_DECOUPLED)["test_rmse"], max(_wh_other_draws()), _field(*WH_AT_ONCE)["settings"]["degree"],
                     _field(*WH_AT_ONCE)["test_rmse"]]),
     Figure(PN, "with Nielsen's the cost still falls by 0.32 dB over the last 100 iterations", FIELD,
            lambda: [_field("wh2009", "PNLSS")["cost_db_every_50"][-3] - _field("wh2009", "PNLSS")["cost_db_every_50"][-1],
