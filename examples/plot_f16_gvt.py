@@ -190,7 +190,7 @@ if train is not None:
 #   2-15 Hz band can reach the published figures; the models need those
 #   modes, driven by their branches.
 # - **Large full models.** A Levenberg-Marquardt iteration of the full
-#   PNLSS model (2,893 parameters, 98,304 residuals) takes about 15 s on two
+#   PNLSS model (2,893 parameters, 98,304 residuals) takes about 6 s on two
 #   cores, most of it J^T J, which runs at the machine's BLAS rate: exact
 #   Gauss-Newton steps on a model of that size cannot be much cheaper.
 # - **Several outputs.** The three accelerations share one cost, each in
