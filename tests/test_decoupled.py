@@ -107,6 +107,9 @@ def test_start_degree_grows_random_branches_off_the_plateau():
             6, n_branches=1, degree=21, init="random", n_init=4, output_branches=True, max_iter=60,
             random_state=0, **kw)).fit(X, y)
         assert model[-1].coef_.shape == (1, 21)  # the full degree in the end
+        # the cost history runs across both stages, and never rises
+        history = model[-1].cost_history_
+        assert len(history) == model[-1].n_iter_ + 1 and np.all(np.diff(history) <= 0)
         return model[-1].init_scores_
 
     # the training cost of each start, dB: measured 5.0, -11.1, 24.3, 22.8

@@ -101,7 +101,8 @@ def optimise_growing_degrees(start, objectives, settings, stages, validation=Non
 
 def chain_stages(fits):
     """One LMFit from consecutive stages, each starting where the previous
-    ended: iterations and validation history run on across the stages."""
+    ended: iterations, cost and validation histories run on across the
+    stages (each stage's costs are those of its last objective)."""
     if len(fits) == 1:
         return fits[0]
     last, done, best = fits[-1], fits[0].n_iter, fits[0].best_iteration
@@ -110,11 +111,14 @@ def chain_stages(fits):
         if fit.best_iteration > 0:
             best = done + fit.best_iteration
         done += fit.n_iter
+    # Each later stage's start repeats the previous stage's kept iterate.
+    def joined(histories):
+        return np.concatenate([histories[0]] + [h[1:] for h in histories[1:]])
+
     val = None
     if last.validation_history is not None:
-        # Each later stage's start repeats the previous stage's kept iterate.
-        val = np.concatenate([fits[0].validation_history] + [f.validation_history[1:] for f in fits[1:]])
+        val = joined([f.validation_history for f in fits])
     return LMFit(
-        model=last.model, n_iter=done, best_iteration=best,
-        cost_history=last.cost_history, validation_history=val, validation_error=last.validation_error,
+        model=last.model, n_iter=done, best_iteration=best, cost_history=joined([f.cost_history for f in fits]),
+        validation_history=val, validation_error=last.validation_error,
     )
