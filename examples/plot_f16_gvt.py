@@ -184,8 +184,9 @@ if train is not None:
 #   above the recurrent equilibrium network's 0.162; a decoupled model of 18
 #   states (``benchmarks/bench_f16.py``), which fits the lowest levels
 #   better, an eighth above it. The rest is most on the payload
-#   acceleration of levels 4 and 6, where the joint's clearance acts most. Most of that error lies above the excited band (the figure
-#   above): the response of modes that only the rattling joint excites.
+#   acceleration of levels 4 and 6, where the joint's clearance acts most.
+#   Most of that error lies above the excited band (the figure above): the
+#   response of modes that only the rattling joint excites.
 #   Their output power alone is an NRMSE of about 0.13 in the mean over
 #   the test levels and outputs, so no model whose dynamics come from the
 #   2-15 Hz band can reach the published figures; the models need those

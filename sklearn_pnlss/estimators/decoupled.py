@@ -100,7 +100,8 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         branch of degree 21, 4 starts) every start grown from degree 7
         leaves the plateau, 1 of 4 started at degree 21; on WH2009 three
         branches grown so reach 0.270 to 0.298 mV on the test record over
-        three draws of the starts (see the user guide's decoupling page). None: all of ``degree`` from the start.
+        three draws of the starts (see the user guide's decoupling page).
+        None: all of ``degree`` from the start.
     n_init : int, default=5
         Starts from different random sampling points and CPD starts
         (``init="cpd"``) or different random directions (``"random"``).
