@@ -138,3 +138,80 @@ def test_the_f16s_gap_lies_at_the_wing_and_softens_beyond_a_clearance(f16_dir):
     assert np.all(nominal_error[1:] > 1.0) and np.all(explained[1:] > 0.9) and explained[0] > 0.6
     pair = next(c for c in loc.ranking_ if c.place == ("wing", "payload"))
     assert pair.nonlinear_gain < 0.5 * best.nonlinear_gain
+
+
+def _docstring_records():
+    """The records of ConnectionLocator's example: two periods of a
+    multisine 0.5-41.5 Hz at two levels, 0.1 % noise."""
+    truth = Structure(M, C, K, points=POINTS, connections=[Connection(CubicStiffness(3e8), "middle", "tip")])
+    rng = np.random.default_rng(0)
+    spectrum = np.zeros(2049, complex)
+    spectrum[10:850:2] = np.exp(2j * np.pi * rng.random(420))
+    u = np.fft.irfft(spectrum)
+    X, Y = [], []
+    for level in (20.0, 60.0):
+        a = truth.simulate(level * u / u.std(), fs=FS, inputs="base", sensors=SENSORS, periodic=True,
+                           oversampling=20, decimation=(4, 5))
+        X.append(np.tile(level * u / u.std(), 2)[:, None])
+        Y.append(np.tile(a, (2, 1)) * (1 + 1e-3 * rng.standard_normal((8192, 3))))
+    return X, Y
+
+
+@pytest.mark.parametrize("motion_snr", [100.0, 10.0])
+def test_a_free_participation_places_a_chains_spring(motion_snr):
+    """participation="free" fits the connection's share of every mass with
+    the law: on the chain (exact nominal, 0.1 % noise) it places the cubic
+    spring right, as the nominal's shapes do, with the relative motion read
+    20 dB or 10 dB over its noise."""
+    X, Y = _records(CubicStiffness(3e8), (20.0, 60.0))
+    loc = ConnectionLocator(Structure(M, C, K, points=POINTS), fs=FS, period=PERIOD, inputs=["base"],
+                            sensors=SENSORS, participation="free", motion_snr=motion_snr).fit(X, Y)
+    assert loc.best_.place == ("middle", "tip") and loc.best_.law.name == "cubic_stiffness"
+    assert loc.best_.explained > 0.99 and loc.best_.participation.shape == (3,)
+    assert loc.best_.corrections is None
+
+
+def test_a_free_participation_read_down_to_10_db_can_misplace():
+    """The limit of that reading: on the example's shorter records (two
+    periods of a narrower multisine) the lines between 10 and 20 dB bias the
+    law enough that another pair leads (a backlash from the base to the
+    tip), where at 20 dB the spring is found. The F-16's answer below needs
+    10 dB: a clue to check, not a verdict."""
+    X, Y = _docstring_records()
+    kwargs = dict(fs=FS, period=PERIOD, inputs=["base"], sensors=SENSORS, participation="free")
+    assert ConnectionLocator(Structure(M, C, K, points=POINTS), **kwargs).fit(X, Y).best_.place == ("middle", "tip")
+    noisy = ConnectionLocator(Structure(M, C, K, points=POINTS), motion_snr=10.0, **kwargs).fit(X, Y)
+    assert noisy.best_.place == ("base", "tip")
+
+
+def test_the_f16s_wing_payload_motion_explains_most_with_a_free_participation(f16_dir):
+    """The F-16 as above, each mode's share of the connection fitted
+    (participation="free") and the relative motions read down to 10 dB
+    over their noise: the wing-payload interface, which the benchmark's
+    description names, explains the most (97 %), and with its coefficients
+    fixed 75 % and more of the error on validation level 2 and 95 % on
+    levels 4 and 6, where every other place explains under 35 % on level 2.
+    Its share of each mode differs from the nominal's phi_wing - phi_payload
+    in sign on two modes (4.0 and 6.6 Hz) and by a factor of 2.5 and more
+    on five: the nominal's shapes at the interface are what hid it. At the
+    default 20 dB the same place explains the least."""
+    points = ["drive", "wing", "payload"]
+    sensors = [(p, "acceleration") for p in points]
+    data = {level: load_f16(f16_dir, level=level, validation_level=None) for level in range(1, 8)}
+    nominal = modal_nominal(data[1].X, data[1].y, fs=400.0, points=points, driving_point="drive",
+                            period=8192, f_band=(2.0, 15.0))
+    train = [data[k].X[0] for k in (1, 3, 5, 7)], [data[k].y[0] for k in (1, 3, 5, 7)]
+    test = [data[k].X[0] for k in (2, 4, 6)], [data[k].y[0] for k in (2, 4, 6)]
+    kwargs = dict(fs=400.0, period=8192, inputs=["drive"], sensors=sensors, f_band=(2.0, 15.0),
+                  participation="free")
+    loc = ConnectionLocator(nominal, motion_snr=10.0, **kwargs).fit(*train)
+    best = loc.best_
+    assert best.place == ("wing", "payload") and best.explained > 0.96
+    explained = {c.place: loc.explained(*test, c)[1] for c in loc.ranking_}
+    assert explained[best.place][0] > 0.75 and np.all(explained[best.place][1:] > 0.95)
+    assert all(e[0] < 0.35 for place, e in explained.items() if place != best.place)
+    own = nominal.direction("wing", "payload")[nominal.coupled]
+    ratio = best.participation / own
+    assert np.sum(ratio < 0) == 2 and np.sum(np.abs(ratio) > 2.5) >= 5
+    at_20_db = ConnectionLocator(nominal, **kwargs).fit(*train)
+    assert at_20_db.ranking_[-1].place == ("wing", "payload")

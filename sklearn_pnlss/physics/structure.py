@@ -311,6 +311,18 @@ class Structure:
         """
         return self._response(freqs, self.direction(point, other)[:, None], sensors)[:, :, 0]
 
+    def dof_response(self, freqs, *, sensors):
+        """The sensors' response to a unit force on each degree of freedom a
+        connection acts on (a coupled mode, or a mass), connections left
+        out: the columns a connection's force is spread over when its share
+        of each is not taken from the point matrix.
+
+        Returns
+        -------
+        H : ndarray of shape (n_freqs, n_sensors, n_coupled), complex
+        """
+        return self._response(freqs, np.eye(self.n_dof)[:, self.coupled], sensors)
+
     def _input_matrix(self, inputs):
         inputs = [inputs] if isinstance(inputs, str) else list(inputs)
         for p in inputs:

@@ -28,6 +28,15 @@ Three readings make the measured motion fit for this:
   its bandwidth, which folds back into the band at the data rate;
 - each output is weighted by its own noise, so that an accelerometer with
   large readings does not outvote the others.
+
+A nominal read off measurements knows a connection's share of each mode,
+``phi_a - phi_b``, only as the difference of two shapes read at one
+driving point: small and uncertain where the two points move almost
+together, as the two sides of a stiff joint do.  ``participation="free"``
+fits that share too, one coefficient per mode and regressor (the law's
+coefficients times the connection's share of each mode, without the
+factorisation): the place is then judged by how well its measured relative
+motion explains the error, not by the nominal's shapes there.
 """
 from dataclasses import dataclass, field, replace
 from itertools import combinations
@@ -38,7 +47,7 @@ from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
 from ...physics.structure import SENSOR_KINDS, Structure
-from ...utils.parameters import Interval, validates_parameters
+from ...utils.parameters import Interval, Options, validates_parameters
 from .laws import LAW_NAMES, force_laws
 from .update import linear_corrections
 from .spectra import PeriodSpectra
@@ -89,6 +98,12 @@ class ConnectionCandidate:
     corrections : ndarray or None
         The nominal's linear corrections fitted with the law (see
         ``linear_corrections``).
+    participation : ndarray or None
+        With ``participation="free"``: the connection's fitted share of each
+        degree of freedom it acts on, in units of the nominal's own
+        (``Structure.direction``); ``coefficients`` then holds one per
+        degree of freedom and regressor, and ``parameters`` the law's
+        coefficients of their best rank-one split. None: the nominal's.
     """
 
     place: tuple
@@ -98,6 +113,7 @@ class ConnectionCandidate:
     explained: float
     linear_explained: float = None
     corrections: np.ndarray = None
+    participation: np.ndarray = None
 
     @property
     def nonlinear_gain(self):
@@ -192,6 +208,15 @@ class ConnectionLocator(BaseEstimator):
         a modal one's its in-band modes' (frequency, damping ratio, shape
         scale:
         :class:`~sklearn_pnlss.gap.connections.recalibrate.ModalCorrection`).
+        Not with ``participation="free"``, whose linear law already changes
+        every mode's stiffness and damping on its own.
+    participation : {"nominal", "free"}, default="nominal"
+        A connection's share of each degree of freedom (each coupled mode
+        of a modal nominal, each mass of a lumped one): the nominal's
+        ``phi_a - phi_b``, or fitted with the law (see the module's notes).
+    motion_snr : float, default=MOTION_SNR
+        Power ratio over its noise at which a line of a relative motion is
+        used (100: 20 dB).
 
     Attributes
     ----------
@@ -262,10 +287,12 @@ class ConnectionLocator(BaseEstimator):
         "f_band": [tuple, list, None],
         "transient_periods": [Interval(Integral, 0, None, closed="left")],
         "linear_corrections": ["boolean"],
+        "participation": [Options(str, {"nominal", "free"})],
+        "motion_snr": [Interval(Real, 0, None, closed="left")],
     }
 
     def __init__(self, nominal, *, fs, period, inputs, sensors, places=None, laws=None, f_band=None,
-                 transient_periods=0, linear_corrections=True):
+                 transient_periods=0, linear_corrections=True, participation="nominal", motion_snr=MOTION_SNR):
         self.nominal = nominal
         self.fs = fs
         self.period = period
@@ -276,6 +303,8 @@ class ConnectionLocator(BaseEstimator):
         self.f_band = f_band
         self.transient_periods = transient_periods
         self.linear_corrections = linear_corrections
+        self.participation = participation
+        self.motion_snr = motion_snr
 
     # -- fitting ------------------------------------------------------------
     @validates_parameters
@@ -306,7 +335,7 @@ class ConnectionLocator(BaseEstimator):
                                                                sensors=list(self.sensors))
         self.input_freqs_ = freqs
         self.correction_ = (linear_corrections(self.nominal, freqs, inputs=self.inputs, sensors=self.sensors)
-                            if self.linear_corrections else None)
+                            if self.linear_corrections and self.participation == "nominal" else None)
         error = self._weighted_error(spectra)
         output_energy = np.sum(np.abs(spectra.Y[:, self.lines_] * self.output_weights_) ** 2, axis=(1, 2))
         self._prior_weight = np.sqrt(CORRECTION_PRICE * np.sum(output_energy))
@@ -387,12 +416,14 @@ class ConnectionLocator(BaseEstimator):
 
     def _place_data(self, place, spectra, freqs):
         a, b = place
-        data = _PlaceData(self.nominal.connection_response(freqs, a, b, sensors=list(self.sensors)))
+        data = _PlaceData(self.nominal.connection_response(freqs, a, b, sensors=list(self.sensors))
+                          if self.participation == "nominal" else
+                          self.nominal.dof_response(freqs, sensors=list(self.sensors)))
         D, noise = self._motion(a, spectra)
         if b is not None:
             D_b, noise_b = self._motion(b, spectra)
             D, noise = D - D_b, noise + noise_b
-        D = np.where(np.abs(D) ** 2 > MOTION_SNR * noise, D, 0.0)
+        D = np.where(np.abs(D) ** 2 > self.motion_snr * noise, D, 0.0)
         s = 2j * np.pi * spectra.freqs
         n_fine = ALIAS_FACTOR * self.period
         for Dk in D:
@@ -402,12 +433,14 @@ class ConnectionLocator(BaseEstimator):
 
     def _columns(self, law, data, index):
         """The design columns of record ``index``: each regressor's force
-        through the place's response, weighted like the error
-        (n_lines * n_outputs, n_coefficients), complex."""
+        through the place's response (each degree of freedom's, with a free
+        participation), weighted like the error (n_lines * n_outputs,
+        n_coefficients), complex."""
         forces = law.regressors(data.displacement[index], data.velocity[index])
         F = np.fft.rfft(forces, axis=0)[self.lines_] / ALIAS_FACTOR
-        cols = -data.response[:, :, None] * F[:, None, :] * self.output_weights_[None, :, None]
-        return cols.reshape(-1, F.shape[1])
+        response = data.response[:, :, None] if data.response.ndim == 2 else data.response
+        cols = -response[:, :, :, None] * F[:, None, None, :] * self.output_weights_[None, :, None, None]
+        return cols.reshape(cols.shape[0] * cols.shape[1], -1)
 
     def _correction_columns(self, spectra, index):
         """The linear corrections' design columns of record ``index``,
@@ -423,7 +456,7 @@ class ConnectionLocator(BaseEstimator):
                             np.hstack([self._columns(law, data, i), corrections[i]]) for i in range(n)])
         b = error.reshape(-1)
         A2, b2 = np.concatenate([A.real, A.imag]), np.concatenate([b.real, b.imag])
-        n_law = len(law.param_names)
+        n_law = len(law.param_names) * (1 if data.response.ndim == 2 else data.response.shape[2])
         # the prior: each correction, with those already made, costs
         # CORRECTION_PRICE of the output's energy per unit
         prior = np.zeros((A2.shape[1] - n_law, A2.shape[1]))
@@ -433,8 +466,26 @@ class ConnectionLocator(BaseEstimator):
         scale[scale == 0] = 1.0
         coef = np.linalg.lstsq(A_fit / scale, b_fit, rcond=None)[0] / scale
         explained = 1.0 - np.sum((b2 - A2 @ coef) ** 2) / np.sum(b2**2)
-        return ConnectionCandidate(place, law, coef[:n_law], law.parameters(coef[:n_law]), float(explained),
-                                   corrections=None if corrections is None else coef[n_law:])
+        law_coef, participation = coef[:n_law], None
+        if data.response.ndim == 3:
+            participation, law_coef = self._split(place, law_coef.reshape(-1, len(law.param_names)))
+        return ConnectionCandidate(place, law, coef[:n_law], law.parameters(law_coef), float(explained),
+                                   corrections=None if corrections is None else coef[n_law:],
+                                   participation=participation)
+
+    def _split(self, place, coefficients):
+        """A free participation's coefficients (n_dof, n_regressors) split
+        into the connection's share of each degree of freedom and the law's
+        coefficients, by their best rank-one approximation, the share scaled
+        to the nominal's own in least squares (its sign and size are
+        otherwise the law's)."""
+        u, sv, vt = np.linalg.svd(coefficients, full_matrices=False)
+        share, law = u[:, 0] * sv[0], vt[0]
+        own = self.nominal.direction(*place)[self.nominal.coupled]
+        scale = float(share @ own) / max(float(own @ own), 1e-300)
+        if scale == 0.0:
+            return share, law
+        return share / scale, law * scale
 
     def _made(self, n):
         """The corrections already made to reach the nominal (none: the
