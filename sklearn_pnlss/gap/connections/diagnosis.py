@@ -261,7 +261,8 @@ class StructuralGapDiagnosis(BaseEstimator):
     """
 
     _parameter_constraints = {
-        **{k: v for k, v in ConnectionLocator._parameter_constraints.items() if k != "linear_corrections"},
+        **{k: v for k, v in ConnectionLocator._parameter_constraints.items()
+           if k not in ("linear_corrections", "participation", "motion_snr")},
         "nominal": [Structure, Options(str, {"modal"})],
         "n_places": [Interval(Integral, 1, None, closed="left")],
         "oversampling": [Interval(Integral, 1, None, closed="left")],
