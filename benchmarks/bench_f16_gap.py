@@ -60,15 +60,16 @@ def main(argv=None):
     start = time.perf_counter()
     nominal = modal_nominal(data[1].X, data[1].y, fs=400.0, points=POINTS, driving_point="drive", period=8192,
                             f_band=(2.0, 15.0))
+    train = [data[k].X[0] for k in TRAIN], [data[k].y[0] for k in TRAIN]
+    test = [data[k].X[0] for k in TEST], [data[k].y[0] for k in TEST]
     gap = StructuralGapDiagnosis(nominal, fs=400.0, period=8192, inputs=["drive"], sensors=SENSORS,
                                  f_band=(2.0, 15.0))
-    gap.fit([data[k].X[0] for k in TRAIN], [data[k].y[0] for k in TRAIN])
+    gap.fit(*train)
     fit_seconds = time.perf_counter() - start
-    report = gap.report([data[k].X[0] for k in TEST], [data[k].y[0] for k in TEST])
+    report = gap.report(*test)
     seconds = time.perf_counter() - start
     print(report)
-    free = free_participation(nominal, ([data[k].X[0] for k in TRAIN], [data[k].y[0] for k in TRAIN]),
-                              ([data[k].X[0] for k in TEST], [data[k].y[0] for k in TEST]))
+    free = free_participation(nominal, train, test)
     fits = [dict(place=f.place, law=f.law.name, train_error=f.train_error.round(4).tolist(),
                  seconds=round(f.seconds, 1), simulations=f.n_simulations) for f in gap.fits_]
     for f in fits:

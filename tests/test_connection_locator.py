@@ -111,7 +111,22 @@ def test_bad_input_is_named():
         _locator().fit([x[:-3] for x in X], [y[:-3] for y in Y])
 
 
-def test_the_f16s_gap_lies_at_the_wing_and_softens_beyond_a_clearance(f16_dir):
+F16_SENSORS = [(p, "acceleration") for p in ("drive", "wing", "payload")]
+
+
+@pytest.fixture(scope="module")
+def f16(f16_dir):
+    """The F-16's training levels 1, 3, 5, 7 and validation levels 2, 4, 6
+    (records as lists), and the modal nominal read off level 1 in 2-15 Hz."""
+    data = {level: load_f16(f16_dir, level=level, validation_level=None) for level in range(1, 8)}
+    nominal = modal_nominal(data[1].X, data[1].y, fs=400.0, points=[p for p, _ in F16_SENSORS],
+                            driving_point="drive", period=8192, f_band=(2.0, 15.0))
+    train = [data[k].X[0] for k in (1, 3, 5, 7)], [data[k].y[0] for k in (1, 3, 5, 7)]
+    test = [data[k].X[0] for k in (2, 4, 6)], [data[k].y[0] for k in (2, 4, 6)]
+    return train, test, nominal
+
+
+def test_the_f16s_gap_lies_at_the_wing_and_softens_beyond_a_clearance(f16):
     """The F-16 (real data), nominal read off level 1 in 2-15 Hz, trained on
     levels 1, 3, 5, 7: the connection that explains most of the nominal's
     error acts at the wing sensor (to the ground, as these three sensors
@@ -123,18 +138,14 @@ def test_the_f16s_gap_lies_at_the_wing_and_softens_beyond_a_clearance(f16_dir):
     though their relative motion is measured (above 20 dB of its noise at 77-86 % of the band's lines):
     a nominal read from one shaker position knows the interface only
     through the global modes, not its own flexibility (see the guide)."""
-    points = ["drive", "wing", "payload"]
-    sensors = [(p, "acceleration") for p in points]
-    data = {level: load_f16(f16_dir, level=level, validation_level=None) for level in range(1, 8)}
-    nominal = modal_nominal(data[1].X, data[1].y, fs=400.0, points=points, driving_point="drive",
-                            period=8192, f_band=(2.0, 15.0))
-    loc = ConnectionLocator(nominal, fs=400.0, period=8192, inputs=["drive"], sensors=sensors,
+    train, test, nominal = f16
+    loc = ConnectionLocator(nominal, fs=400.0, period=8192, inputs=["drive"], sensors=F16_SENSORS,
                             f_band=(2.0, 15.0))
-    loc.fit([data[k].X[0] for k in (1, 3, 5, 7)], [data[k].y[0] for k in (1, 3, 5, 7)])
+    loc.fit(*train)
     best = loc.best_
     assert best.place == ("wing", None) and best.law.name == "backlash"
     assert best.parameters["kb"] < 0 and best.explained > 0.9 and best.nonlinear_gain > 0.03
-    nominal_error, explained = loc.explained([data[k].X[0] for k in (2, 4, 6)], [data[k].y[0] for k in (2, 4, 6)])
+    nominal_error, explained = loc.explained(*test)
     assert np.all(nominal_error[1:] > 1.0) and np.all(explained[1:] > 0.9) and explained[0] > 0.6
     pair = next(c for c in loc.ranking_ if c.place == ("wing", "payload"))
     assert pair.nonlinear_gain < 0.5 * best.nonlinear_gain
@@ -184,7 +195,7 @@ def test_a_free_participation_read_down_to_10_db_can_misplace():
     assert noisy.best_.place == ("base", "tip")
 
 
-def test_the_f16s_wing_payload_motion_explains_most_with_a_free_participation(f16_dir):
+def test_the_f16s_wing_payload_motion_explains_most_with_a_free_participation(f16):
     """The F-16 as above, each mode's share of the connection fitted
     (participation="free") and the relative motions read down to 10 dB
     over their noise: the wing-payload interface, which the benchmark's
@@ -195,14 +206,8 @@ def test_the_f16s_wing_payload_motion_explains_most_with_a_free_participation(f1
     in sign on two modes (4.0 and 6.6 Hz) and by a factor of 2.5 and more
     on five: the nominal's shapes at the interface are what hid it. At the
     default 20 dB the same place explains the least."""
-    points = ["drive", "wing", "payload"]
-    sensors = [(p, "acceleration") for p in points]
-    data = {level: load_f16(f16_dir, level=level, validation_level=None) for level in range(1, 8)}
-    nominal = modal_nominal(data[1].X, data[1].y, fs=400.0, points=points, driving_point="drive",
-                            period=8192, f_band=(2.0, 15.0))
-    train = [data[k].X[0] for k in (1, 3, 5, 7)], [data[k].y[0] for k in (1, 3, 5, 7)]
-    test = [data[k].X[0] for k in (2, 4, 6)], [data[k].y[0] for k in (2, 4, 6)]
-    kwargs = dict(fs=400.0, period=8192, inputs=["drive"], sensors=sensors, f_band=(2.0, 15.0),
+    train, test, nominal = f16
+    kwargs = dict(fs=400.0, period=8192, inputs=["drive"], sensors=F16_SENSORS, f_band=(2.0, 15.0),
                   participation="free")
     loc = ConnectionLocator(nominal, motion_snr=10.0, **kwargs).fit(*train)
     best = loc.best_
