@@ -22,9 +22,11 @@ starts from the one that leaves less to explain, see
 off (``off``), a model never updated on the test, which the diagnosis
 updates first (``recalibrate=True``: its masses, springs and modal damping
 on the lowest level, :mod:`sklearn_pnlss.gap.connections.update`).  Cases
-without an element must not be claimed (no false alarm); a Bouc-Wen hysteresis, which no candidate law
-is, is scored on the place (``hysteresis``), and should leave more than
-``EXPLAINED_DB`` over the noise.
+without an element must not be claimed (no false alarm).  A Bouc-Wen
+hysteresis of the benchmark's shape (``hysteresis``) is scored like the
+other effects: the candidate hysteresis is a Jenkins-like joint of another
+shape (see :mod:`~sklearn_pnlss.gap.connections.laws`), so its place is
+recorded on its own as well.
 
 Target (issue 38): the right law at the right place in at least 90 % of
 the cases, no false alarm, median under 60 s per diagnosis on 2 cores.
@@ -181,8 +183,6 @@ def run_case(effect, nominal_kind, seed):
     right_place = set(report.place) == set(case["joint"])
     if effect is None:
         ok = not report.effect_found
-    elif effect == "hysteresis":
-        ok = right_place  # no candidate law is a hysteresis: the place is what can be right
     else:
         ok = report.effect_found and right_place and report.law == effect
     row.update(got_place=report.place, got_law=report.law, effect_found=report.effect_found, ok=bool(ok),
@@ -195,7 +195,7 @@ def run_case(effect, nominal_kind, seed):
 
 def summarise(rows):
     done = [r for r in rows if "ok" in r]
-    effect_rows = [r for r in done if r["true"] not in (None, "hysteresis")]
+    effect_rows = [r for r in done if r["true"] is not None]
     return dict(
         cases=len(done), skipped=len(rows) - len(done),
         right_law_and_place=float(np.mean([r["ok"] for r in effect_rows])) if effect_rows else None,
@@ -203,11 +203,9 @@ def summarise(rows):
                     for k in NOMINALS if any(r["nominal"] == k for r in effect_rows)},
         false_alarms=sum(1 for r in done if r["true"] is None and not r["ok"]),
         null_cases=sum(1 for r in done if r["true"] is None),
-        hysteresis_right_place=[r["ok"] for r in done if r["true"] == "hysteresis"],
-        # no candidate law is a hysteresis: it should leave more than the
-        # diagnosis' EXPLAINED_DB over the noise ("unexplained" in part)
-        hysteresis_unexplained=[bool(max(r["left_over_noise_db"]) > EXPLAINED_DB) for r in done
-                                if r["true"] == "hysteresis"],
+        # the candidate hysteresis is a Jenkins-like joint, the family's a
+        # Bouc-Wen of the benchmark's shape: the place at least
+        hysteresis_right_place=[set(r["got_place"]) == set(r["joint"]) for r in done if r["true"] == "hysteresis"],
         right_law_fully_explained=[bool(max(r["left_over_noise_db"]) <= EXPLAINED_DB) for r in effect_rows
                                    if r["ok"]],
         median_seconds=float(np.median([r["seconds"] for r in done])) if done else None,

@@ -24,7 +24,7 @@ gap closes once that connection is simulated.
    that explain most and fits them by simulation error.
 3. The report reads the chosen connection on the test levels 2, 4 and 6.
 
-The whole run takes about five minutes on two cores (the benchmark
+The whole run takes about seven minutes on two cores (the benchmark
 ``benchmarks/bench_f16_gap.py`` repeats it and records the time). The
 data are not shipped with the library: set ``SKLEARN_PNLSS_F16_DATA`` to
 the folder of the benchmark's ``F16Data_*.mat`` files (see
@@ -102,10 +102,11 @@ if data is not None:
 # The same reading with each mode's share of every connection fitted with
 # its law (``participation="free"``) and the relative motions read down to
 # 10 dB over their noise: the wing-payload interface, which the benchmark's
-# description names, now explains the most, on the test levels too. A
-# clue, not a verdict: the diagnosis still simulates each law with the
-# nominal's shares, and read down to 10 dB the locator can misplace a
-# connection on short records (see the user guide's F-16 paragraph).
+# description names, now explains the most, on the test levels too, ahead
+# of a hysteresis from the wing to the ground by a narrow margin. A clue,
+# not a verdict: the diagnosis simulates each law with the nominal's
+# shares, and read down to 10 dB the locator can misplace a connection on
+# short records (see the user guide's F-16 paragraph).
 if data is not None:
     from sklearn_pnlss.gap import ConnectionLocator
 

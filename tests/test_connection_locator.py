@@ -7,7 +7,7 @@ import pytest
 
 from sklearn_pnlss.datasets import load_f16
 from sklearn_pnlss.gap import ConnectionLocator, modal_nominal
-from sklearn_pnlss.physics import Connection, CoulombFriction, CubicStiffness, DeadZoneSpring, Structure
+from sklearn_pnlss.physics import BoucWen, Connection, CoulombFriction, CubicStiffness, DeadZoneSpring, Structure
 
 POINTS = ["base", "middle", "tip"]
 M = np.diag([3.0, 2.0, 1.0])
@@ -69,6 +69,26 @@ def test_the_connection_and_its_law_are_found_on_a_chain(element, law, coefficie
     assert loc.score(X_val, Y_val) > 0.95
 
 
+def test_a_joint_that_sticks_and_slips_is_found_as_a_hysteresis():
+    """A Jenkins-like joint between the middle mass and the tip (stuck
+    stiffness 2e4 N/m, slipping at 20 N): the locator's hysteresis law,
+    read along the measured relative motion, explains the error to the
+    noise at the right place on the training and on two new levels, its
+    stuck stiffness within 10 % (its slip is profiled on a grid, which the
+    stiffness absorbs in part); a backlash or a dry friction there explains
+    less."""
+    X, Y = _records(BoucWen(2e4, 1e3, 0.5, 0.5, 1.0), (20.0, 40.0, 60.0))
+    loc = _locator().fit(X, Y)
+    best = loc.best_
+    assert (best.place, best.law.name) == (("middle", "tip"), "hysteresis")
+    assert best.explained > 0.98
+    assert abs(best.parameters["alpha"] / 2e4 - 1) < 0.1
+    others = [c for c in loc.candidates_ if c.place == best.place and c.law.name != "hysteresis"]
+    assert max(c.explained for c in others) < best.explained - 0.02
+    X_val, Y_val = _records(BoucWen(2e4, 1e3, 0.5, 0.5, 1.0), (30.0, 50.0), seed=1)
+    assert loc.score(X_val, Y_val) > 0.95
+
+
 def test_a_nominal_read_off_the_lowest_level_finds_the_cubic_spring():
     """No model at all: the nominal is the modal model of the lowest level
     (5 N, where the spring barely acts); the cubic spring between the middle
@@ -88,14 +108,15 @@ def test_a_linear_structure_leaves_only_noise_to_explain():
     output in the band at 20 times the data rate), linear: the modal
     corrections explain it as well as any law does (a real effect's law
     gains 10 % and more beyond them, above); without them a backlash
-    profiled over its clearance picks up 1-2 % of it."""
+    profiled over its clearance picks up 1-2 % of it, a hysteresis (a
+    loop that barely bends, a damping linear in the amplitude) 3 %."""
     X, Y = _records(None, (20.0, 60.0))
     loc = _locator().fit(X, Y)
     assert np.all(loc.nominal_error_ < 0.025)
     assert max(c.nonlinear_gain for c in loc.ranking_) < 1e-3
     plain = ConnectionLocator(Structure(M, C, K, points=POINTS), fs=FS, period=PERIOD, inputs=["base"],
                               sensors=SENSORS, linear_corrections=False).fit(X, Y)
-    assert max(c.nonlinear_gain for c in plain.ranking_) < 0.025
+    assert max(c.nonlinear_gain for c in plain.ranking_) < 0.04
 
 
 def test_bad_input_is_named():
@@ -126,14 +147,17 @@ def f16(f16_dir):
     return train, test, nominal
 
 
-def test_the_f16s_gap_lies_at_the_wing_and_softens_beyond_a_clearance(f16):
+def test_the_f16s_gap_lies_at_the_wing_in_a_joint_that_sticks_and_slips(f16):
     """The F-16 (real data), nominal read off level 1 in 2-15 Hz, trained on
     levels 1, 3, 5, 7: the connection that explains most of the nominal's
     error acts at the wing sensor (to the ground, as these three sensors
-    resolve it) and softens beyond a clearance, 3 % and more beyond a
-    linear change there with the modal corrections; with its coefficients
-    fixed it explains at least 90 % of the error on validation levels 4 and
-    6 and 60 % on level 2.
+    resolve it) and is a joint that sticks and slips: a Jenkins-like
+    hysteresis (the loop unloading along its stuck stiffness) whose stuck
+    stiffness the law's own stiffness change cancels within 10 %, so that
+    the lowest level's nominal stays as it was and the wing softens and
+    dissipates as it slips; 5 % and more beyond a linear change there with
+    the modal corrections. With its coefficients fixed it explains at least
+    95 % of the error on validation levels 4 and 6 and 80 % on level 2.
     A law between the wing and the payload gains less than half as much,
     though their relative motion is measured (above 20 dB of its noise at 77-86 % of the band's lines):
     a nominal read from one shaker position knows the interface only
@@ -143,10 +167,12 @@ def test_the_f16s_gap_lies_at_the_wing_and_softens_beyond_a_clearance(f16):
                             f_band=(2.0, 15.0))
     loc.fit(*train)
     best = loc.best_
-    assert best.place == ("wing", None) and best.law.name == "backlash"
-    assert best.parameters["kb"] < 0 and best.explained > 0.9 and best.nonlinear_gain > 0.03
+    assert best.place == ("wing", None) and best.law.name == "hysteresis"
+    p = best.parameters
+    assert p["gamma"] == p["delta"] and abs(p["stiffness"] / p["alpha"] + 1) < 0.1
+    assert best.explained > 0.95 and best.nonlinear_gain > 0.05
     nominal_error, explained = loc.explained(*test)
-    assert np.all(nominal_error[1:] > 1.0) and np.all(explained[1:] > 0.9) and explained[0] > 0.6
+    assert np.all(nominal_error[1:] > 1.0) and np.all(explained[1:] > 0.95) and explained[0] > 0.8
     pair = next(c for c in loc.ranking_ if c.place == ("wing", "payload"))
     assert pair.nonlinear_gain < 0.5 * best.nonlinear_gain
 
@@ -201,7 +227,9 @@ def test_the_f16s_wing_payload_motion_explains_most_with_a_free_participation(f1
     over their noise: the wing-payload interface, which the benchmark's
     description names, explains the most (97 %), and with its coefficients
     fixed 75 % and more of the error on validation level 2 and 95 % on
-    levels 4 and 6, where every other place explains under 35 % on level 2.
+    levels 4 and 6. Its lead is narrow: a hysteresis from the wing or the
+    payload to the ground explains 95 % and 94 %, and no more than 80 % of
+    level 2 either (without that law no other place explained 35 % there).
     Its share of each mode differs from the nominal's phi_wing - phi_payload
     in sign on two modes (4.0 and 6.6 Hz) and by a factor of 2.5 and more
     on five: the nominal's shapes at the interface are what hid it. At the
@@ -214,7 +242,8 @@ def test_the_f16s_wing_payload_motion_explains_most_with_a_free_participation(f1
     assert best.place == ("wing", "payload") and best.explained > 0.96
     explained = {c.place: loc.explained(*test, c)[1] for c in loc.ranking_}
     assert explained[best.place][0] > 0.75 and np.all(explained[best.place][1:] > 0.95)
-    assert all(e[0] < 0.35 for place, e in explained.items() if place != best.place)
+    assert loc.ranking_[1].explained < best.explained - 0.01
+    assert all(e[0] < 0.8 for place, e in explained.items() if place != best.place)
     own = nominal.direction("wing", "payload")[nominal.coupled]
     ratio = best.participation / own
     assert np.sum(ratio < 0) == 2 and np.sum(np.abs(ratio) > 2.5) >= 5

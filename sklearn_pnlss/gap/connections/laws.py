@@ -9,25 +9,52 @@ element's physical parameter.  The force is the integrator's own
 smoothing included, so a law read here simulates as fitted.
 
 A clearance enters nonlinearly; it is profiled over ``BACKLASH_GAPS``
-(multiples of the relative displacement's rms), each gap one law.
+(multiples of the relative displacement's rms), each gap one law.  So does the
+loop of a hysteresis: a Bouc-Wen element with ``nu = 1``, whose force grows
+along the motion at the rate ``alpha - b z`` while it loads (``b =
+beta (gamma + delta)``) and ``alpha - b' z`` while it unloads (``b' =
+beta (gamma - delta)``).  It is profiled over its slip displacement
+``1 / b`` (``SLIP_DISPLACEMENTS``) and the ratio ``b' / b``
+(``UNLOADING_RATES``): 0 is a smoothed Jenkins element (a spring ``alpha``
+in series with a dry-friction slider that holds at most ``alpha / b``,
+unloading along the stuck stiffness: a bolted joint that sticks and
+slips), 1 a loop that softens alike both ways, 4 the Bouc-Wen benchmark's
+shape (unloading stiffer than the stuck stiffness).  With the law's own
+stiffness change near ``-alpha`` a Jenkins joint leaves the lowest
+level's nominal as it was and softens and damps the structure as the level
+rises.  Its force depends on the motion's history and is integrated along
+the measured record
+(:func:`~sklearn_pnlss.physics.hysteresis_path.bouc_wen_along`); a fit by
+simulation frees ``beta`` and ``delta`` (``gamma`` kept), so every loop of
+``nu = 1`` is within its reach.
 """
 from dataclasses import dataclass
+from itertools import product
 
 import numpy as np
 
-from ...physics.forces import (CoulombFriction, CubicStiffness, DeadZoneSpring, QuadraticDamping,
+from ...physics.forces import (BoucWen, CoulombFriction, CubicStiffness, DeadZoneSpring, QuadraticDamping,
                                QuadraticStiffness)
+from ...physics.hysteresis_path import bouc_wen_along
 from ...physics.oscillator import Oscillator
 
 __all__ = ["ForceLaw", "force_laws", "LAW_NAMES"]
 
 #: The laws tried by default: names shared with the single-mass effects.
 LAW_NAMES = ("linear", "cubic_stiffness", "quadratic_stiffness", "coulomb_friction", "quadratic_damping",
-             "backlash")
+             "backlash", "hysteresis")
 #: Clearances a backlash is profiled over, in rms relative displacements:
 #: from a clearance that most of the motion crosses to one only its peaks
 #: reach (a multisine's peaks sit near three rms).
 BACKLASH_GAPS = (0.25, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0)
+#: Slip displacements ``1 / b`` a hysteresis is profiled over, in rms
+#: relative displacements: from a joint that slips through most of the
+#: motion (a dry friction with a stiff contact) to a loop that only bends
+#: at the peaks of the highest level.
+SLIP_DISPLACEMENTS = (0.1, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0)
+#: Unloading rates ``b' / b`` a hysteresis is profiled over: a Jenkins
+#: element, a symmetric loop, the Bouc-Wen benchmark's shape.
+UNLOADING_RATES = (0.0, 1.0, 4.0)
 #: Coulomb friction is smoothed over this share of the rms relative velocity
 #: (as the single-mass effect is): a sign function at the velocities that
 #: carry the response, smooth for Newton's method.
@@ -49,12 +76,17 @@ class ForceLaw:
     fixed : dict
         The element's parameters that are not fitted (a clearance, a
         smoothing), physical units.
+    profiled : tuple of str
+        The parameters of ``fixed`` profiled on a grid here and freed in a
+        fit by simulation (a clearance; a hysteresis's ``beta`` and
+        ``delta``).
     """
 
     name: str
     element: object = None
     coefficient: str = None
     fixed: dict = None
+    profiled: tuple = ()
 
     @property
     def param_names(self):
@@ -66,7 +98,10 @@ class ForceLaw:
         ``v`` (arrays of one length): columns of the force per unit
         coefficient."""
         columns = [d, v]
-        if self.element is not None:
+        if isinstance(self.element, BoucWen):  # a force with a history: along the (periodic) record
+            e = self.element
+            columns.append(bouc_wen_along(d, e.alpha, e.beta, e.gamma, e.delta))
+        elif self.element is not None:
             columns.append(Oscillator(1.0, 0.0, 0.0, (self.element,)).restoring_force(d, v))
         return np.stack(columns, axis=-1)
 
@@ -76,9 +111,9 @@ class ForceLaw:
 
     @property
     def free_names(self):
-        """The parameters a fit by simulation frees: the coefficients and a
-        clearance (profiled on a grid here)."""
-        return self.param_names + (("gap",) if self.fixed and "gap" in self.fixed else ())
+        """The parameters a fit by simulation frees: the coefficients and the
+        one profiled on a grid here."""
+        return self.param_names + tuple(self.profiled)
 
     def element_with(self, parameters):
         """The nonlinear element at these physical ``parameters`` (None for
@@ -91,7 +126,8 @@ class ForceLaw:
 
 def force_laws(names, displacement_rms, velocity_rms):
     """The laws named in ``names`` for a connection whose relative motion
-    has these rms values (a backlash gives one law per profiled gap).
+    has these rms values (a backlash gives one law per profiled gap, a
+    hysteresis one per profiled slip displacement).
 
     Parameters
     ----------
@@ -121,7 +157,13 @@ def force_laws(names, displacement_rms, velocity_rms):
         if name == "backlash":
             for g in BACKLASH_GAPS:
                 gap = float(g * displacement_rms)
-                laws.append(ForceLaw("backlash", DeadZoneSpring(1.0, gap), "kb", dict(gap=gap)))
+                laws.append(ForceLaw("backlash", DeadZoneSpring(1.0, gap), "kb", dict(gap=gap), ("gap",)))
+        elif name == "hysteresis":
+            for slip, ratio in product(SLIP_DISPLACEMENTS, UNLOADING_RATES):
+                # beta = b, so gamma and delta hold the shape: (1 +- ratio) / 2
+                shape = dict(beta=float(1.0 / (slip * displacement_rms)), gamma=(1.0 + ratio) / 2,
+                             delta=(1.0 - ratio) / 2, nu=1.0)
+                laws.append(ForceLaw("hysteresis", BoucWen(1.0, **shape), "alpha", shape, ("beta", "delta")))
         else:
             laws.append(single[name])
     return laws

@@ -211,8 +211,9 @@ def fit_connection(nominal, candidate, error, *, scales, max_nfev=20, correction
     scale = np.array([abs(p0[n]) if p0[n] != 0 else typical.get(n, 1.0) for n in names])
     n_modal = 0 if correction is None else correction.n_params
     lower = np.full(len(names) + n_modal, -np.inf)
-    if "gap" in names:
-        lower[names.index("gap")] = -p0["gap"] / scale[names.index("gap")]  # a clearance is not negative
+    for name in set(law.profiled) & {"gap", "beta"}:  # a clearance, a slip's inverse: not negative
+        i = names.index(name)
+        lower[i] = -p0[name] / scale[i]
 
     def parameters(theta):
         return {**p0, **{n: float(p0[n] + t * s) for n, t, s in zip(names, theta, scale)}}
