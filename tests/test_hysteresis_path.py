@@ -53,6 +53,8 @@ def test_the_force_is_the_structures_along_its_own_motion():
     assert np.max(np.abs(error)) < 1e-2 * np.max(np.abs(z))
 
 
-def test_a_motion_that_is_not_one_period_is_refused():
+def test_bad_input_is_named():
     with pytest.raises(ValueError, match="displacement must be one period"):
         bouc_wen_along(np.zeros((10, 2)), 1.0, 1.0, 0.5, 0.5)
+    with pytest.raises(ValueError, match="alpha must be > 0 and beta >= 0"):
+        bouc_wen_along(np.zeros(10), -1.0, 1.0, 0.5, 0.5)

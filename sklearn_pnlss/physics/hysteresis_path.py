@@ -32,12 +32,12 @@ def _advance(z, length, alpha, rate_pos, rate_neg):
     if z < 0.0:
         # below zero first; the rate at z = 0 is alpha, so z rises through it
         k = rate_neg
-        if abs(k) * length < 1e-12:
+        if abs(k) * length < 1e-12:  # linear over the step: no exponential to round off
             reach = -z / alpha
-        elif alpha - k * z <= 0.0:  # never reaches zero (a softening branch past its asymptote)
+        elif alpha - k * z <= 0.0:  # a loop that falls away below zero never comes back
             reach = np.inf
         else:
-            reach = np.log(alpha / (alpha - k * z)) / -k if k != 0.0 else -z / alpha
+            reach = np.log((alpha - k * z) / alpha) / k
         if reach >= length:
             if abs(k) * length < 1e-12:
                 return z + alpha * length
@@ -77,7 +77,7 @@ def bouc_wen_along(displacement, alpha, beta, gamma, delta):
         One period of the displacement, m, sampled finely enough that it is
         monotone between samples.
     alpha, beta, gamma, delta : float
-        The element's parameters (``nu = 1``).
+        The element's parameters (``nu = 1``; ``alpha > 0``, ``beta >= 0``).
 
     Returns
     -------
@@ -99,4 +99,7 @@ def bouc_wen_along(displacement, alpha, beta, gamma, delta):
     d = np.ascontiguousarray(displacement, dtype=np.float64)
     if d.ndim != 1 or d.size < 2:
         raise ValueError(f"displacement must be one period, a 1-D array of two samples or more; got shape {d.shape}.")
+    if not alpha > 0 or not beta >= 0:
+        raise ValueError(f"alpha must be > 0 and beta >= 0 (a loop that starts along a positive stiffness); "
+                         f"got alpha={alpha!r}, beta={beta!r}.")
     return _path(d, float(alpha), float(beta), float(gamma), float(delta), np.empty_like(d))

@@ -78,7 +78,7 @@ class ForceLaw:
         smoothing), physical units.
     profiled : tuple of str
         The parameters of ``fixed`` profiled on a grid here and freed in a
-        fit by simulation (a clearance; a hysteresis's ``beta`` and
+        fit by simulation (a clearance; a hysteresis' ``beta`` and
         ``delta``).
     """
 
@@ -111,8 +111,8 @@ class ForceLaw:
 
     @property
     def free_names(self):
-        """The parameters a fit by simulation frees: the coefficients and the
-        one profiled on a grid here."""
+        """The parameters a fit by simulation frees: the coefficients and
+        those profiled on a grid here."""
         return self.param_names + tuple(self.profiled)
 
     def element_with(self, parameters):
@@ -127,7 +127,7 @@ class ForceLaw:
 def force_laws(names, displacement_rms, velocity_rms):
     """The laws named in ``names`` for a connection whose relative motion
     has these rms values (a backlash gives one law per profiled gap, a
-    hysteresis one per profiled slip displacement).
+    hysteresis one per profiled slip displacement and unloading rate).
 
     Parameters
     ----------
