@@ -117,6 +117,9 @@ def test_a_linear_structure_leaves_only_noise_to_explain():
     plain = ConnectionLocator(Structure(M, C, K, points=POINTS), fs=FS, period=PERIOD, inputs=["base"],
                               sensors=SENSORS, linear_corrections=False).fit(X, Y)
     assert max(c.nonlinear_gain for c in plain.ranking_) < 0.04
+    # a hysteresis is passive: its stuck stiffness is never read negative
+    loops = [c for c in loc.candidates_ + plain.candidates_ if c.law.name == "hysteresis"]
+    assert len(loops) == 12 and all(c.parameters["alpha"] >= 0 for c in loops)
 
 
 def test_bad_input_is_named():

@@ -26,7 +26,8 @@ rises.  Its force depends on the motion's history and is integrated along
 the measured record
 (:func:`~sklearn_pnlss.physics.hysteresis_path.bouc_wen_along`); a fit by
 simulation frees ``beta`` and ``delta`` (``gamma`` kept), so every loop of
-``nu = 1`` is within its reach.
+``nu = 1`` is within its reach.  Its ``alpha`` is never negative (see
+``ForceLaw.nonnegative``): a passive joint's loop dissipates.
 """
 from dataclasses import dataclass
 from itertools import product
@@ -80,6 +81,10 @@ class ForceLaw:
         The parameters of ``fixed`` profiled on a grid here and freed in a
         fit by simulation (a clearance; a hysteresis' ``beta`` and
         ``delta``).
+    nonnegative : tuple of str
+        The parameters that cannot be negative: a clearance; a hysteresis'
+        stuck stiffness ``alpha`` (below zero its loop runs the other way
+        round and gives energy back: no joint does) and ``beta``.
     """
 
     name: str
@@ -87,6 +92,7 @@ class ForceLaw:
     coefficient: str = None
     fixed: dict = None
     profiled: tuple = ()
+    nonnegative: tuple = ()
 
     @property
     def param_names(self):
@@ -157,13 +163,14 @@ def force_laws(names, displacement_rms, velocity_rms):
         if name == "backlash":
             for g in BACKLASH_GAPS:
                 gap = float(g * displacement_rms)
-                laws.append(ForceLaw("backlash", DeadZoneSpring(1.0, gap), "kb", dict(gap=gap), ("gap",)))
+                laws.append(ForceLaw("backlash", DeadZoneSpring(1.0, gap), "kb", dict(gap=gap), ("gap",), ("gap",)))
         elif name == "hysteresis":
             for slip, ratio in product(SLIP_DISPLACEMENTS, UNLOADING_RATES):
                 # beta = b, so gamma and delta hold the shape: (1 +- ratio) / 2
                 shape = dict(beta=float(1.0 / (slip * displacement_rms)), gamma=(1.0 + ratio) / 2,
                              delta=(1.0 - ratio) / 2, nu=1.0)
-                laws.append(ForceLaw("hysteresis", BoucWen(1.0, **shape), "alpha", shape, ("beta", "delta")))
+                laws.append(ForceLaw("hysteresis", BoucWen(1.0, **shape), "alpha", shape, ("beta", "delta"),
+                                     ("alpha", "beta")))
         else:
             laws.append(single[name])
     return laws

@@ -211,9 +211,9 @@ def fit_connection(nominal, candidate, error, *, scales, max_nfev=20, correction
     scale = np.array([abs(p0[n]) if p0[n] != 0 else typical.get(n, 1.0) for n in names])
     n_modal = 0 if correction is None else correction.n_params
     lower = np.full(len(names) + n_modal, -np.inf)
-    for name in set(law.profiled) & {"gap", "beta"}:  # a clearance, a slip's inverse: not negative
+    for name in law.nonnegative:
         i = names.index(name)
-        lower[i] = -p0[name] / scale[i]
+        lower[i] = -max(p0[name], 0.0) / scale[i]
 
     def parameters(theta):
         return {**p0, **{n: float(p0[n] + t * s) for n, t, s in zip(names, theta, scale)}}
