@@ -25,6 +25,16 @@ PASSES = 2
 
 
 @njit(cache=True)
+def _travel(z, length, alpha, k):
+    """``z`` after a displacement ``length`` along ``dz/dl = alpha - k z``:
+    exact, or linear where ``k`` hardly acts over the step (the
+    exponential would round off)."""
+    if abs(k) * length < 1e-12:
+        return z + (alpha - k * z) * length
+    return alpha / k + (z - alpha / k) * np.exp(-k * length)
+
+
+@njit(cache=True)
 def _advance(z, length, alpha, rate_pos, rate_neg):
     """``z`` after a displacement ``length`` (> 0) travelled in the
     direction where ``z`` counts positive: ``dz/dl = alpha - k z`` with
@@ -32,22 +42,17 @@ def _advance(z, length, alpha, rate_pos, rate_neg):
     if z < 0.0:
         # below zero first; the rate at z = 0 is alpha, so z rises through it
         k = rate_neg
-        if abs(k) * length < 1e-12:  # linear over the step: no exponential to round off
+        if abs(k) * length < 1e-12:
             reach = -z / alpha
         elif alpha - k * z <= 0.0:  # a loop that falls away below zero never comes back
             reach = np.inf
         else:
             reach = np.log((alpha - k * z) / alpha) / k
         if reach >= length:
-            if abs(k) * length < 1e-12:
-                return z + alpha * length
-            return alpha / k + (z - alpha / k) * np.exp(-k * length)
+            return _travel(z, length, alpha, k)
         length -= reach
         z = 0.0
-    k = rate_pos
-    if abs(k) * length < 1e-12:
-        return z + (alpha - k * z) * length
-    return alpha / k + (z - alpha / k) * np.exp(-k * length)
+    return _travel(z, length, alpha, rate_pos)
 
 
 @njit(cache=True)

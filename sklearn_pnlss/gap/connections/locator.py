@@ -465,12 +465,13 @@ class ConnectionLocator(BaseEstimator):
         scale = np.linalg.norm(A_fit, axis=0)
         scale[scale == 0] = 1.0
         coef = np.linalg.lstsq(A_fit / scale, b_fit, rcond=None)[0] / scale
-        if data.response.ndim == 2 and law.coefficient in law.nonnegative and coef[2] < 0:
+        k = law.param_names.index(law.coefficient) if law.coefficient in law.nonnegative else None
+        if data.response.ndim == 2 and k is not None and coef[k] < 0:
             # a coefficient that must not be negative (a passive element)
             # is held at zero: the law adds nothing to its linear part
-            A_fit[:, 2], scale[2] = 0.0, 1.0
+            A_fit[:, k], scale[k] = 0.0, 1.0
             coef = np.linalg.lstsq(A_fit / scale, b_fit, rcond=None)[0] / scale
-            coef[2] = 0.0  # exactly (its column's least-norm value is a rounding error's)
+            coef[k] = 0.0  # exactly (its column's least-norm value is a rounding error's)
         explained = 1.0 - np.sum((b2 - A2 @ coef) ** 2) / np.sum(b2**2)
         law_coef, participation = coef[:n_law], None
         if data.response.ndim == 3:
