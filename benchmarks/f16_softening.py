@@ -2,7 +2,8 @@
 mode (issue 38).
 
 A joint whose stiffness k drops by dk between two levels lowers each mode's
-squared angular frequency by dk psi_r**2 (mass-normalised modes), and a
+squared angular frequency by dk psi_r**2 (mass-normalised modes, to first
+order in the change; the two levels' modes matched by their order), and a
 damping it adds raises each mode's 2 zeta_r omega_r by dc psi_r**2, where
 psi_r is the mode's share of the joint's relative motion: phi_a - phi_b
 for a joint between the points a and b, phi_a to the ground. So the
