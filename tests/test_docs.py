@@ -323,7 +323,8 @@ def _f16_held_out(n_branches, n_knots):
 def _f16_rows_18():
     """Every fit of 18 states, three branches of degree 3, polynomial or spline, all draws."""
     f16 = _results("f16")
-    return [r for r in f16["models"] + f16["draws"] if r["model"]["estimator"].startswith("DecoupledPNLSSRegressor(18, 3, 3")]
+    return [r for r in f16["models"] + f16["draws"]
+            if r["model"]["estimator"].startswith("DecoupledPNLSSRegressor(18, 3, 3")]
 
 
 def _f16_draw(seed, model="DecoupledPNLSSRegressor(18, 3, 3) random"):
