@@ -607,6 +607,13 @@ def _softening(key):
     return _results("f16_softening")[key]
 
 
+def _softening_share(place=None, key="stiffness_explained"):
+    """A sensor place's share of the F-16's mode-by-mode softening
+    (f16_softening.py); None: the largest of any place."""
+    rows = _softening("places")
+    return 100 * (max(r[key] for r in rows) if place is None else next(r[key] for r in rows if r["place"] == place))
+
+
 def _f16_gap(key):
     return _results("f16_gap")[key]
 
@@ -888,16 +895,13 @@ FIGURES = [
     Figure(GAP, "a linear change there is 1.3 %", F16_GAP, lambda: [100 * _f16_pair("nonlinear_gain")]),
     Figure(R, "The modes' own changes from level 1 to 7 fit no place of the three sensors "
               "(`benchmarks/f16_softening.py`: the best explains 65 % of the modes' stiffness loss, the interface 35 %)",
-           SOFTENING, lambda: [*_softening("levels"), 100 * max(r["stiffness_explained"] for r in _softening("places")),
-                               *(100 * r["stiffness_explained"] for r in _softening("places")
-                                 if r["place"] == ["wing", "payload"])]),
+           SOFTENING, lambda: [*_softening("levels"), _softening_share(), _softening_share(["wing", "payload"])]),
     Figure(GAP, "From level 1 to level 7 the 6.6 Hz mode loses the most stiffness", SOFTENING,
            lambda: [*_softening("levels"), max(zip(_softening("stiffness_loss"), _softening("frequencies_hz")))[1]]),
     Figure(GAP, "No sensor place's shape explains more than 65 % of the modes' stiffness loss", SOFTENING,
-           lambda: [100 * max(r["stiffness_explained"] for r in _softening("places"))]),
+           lambda: [_softening_share()]),
     Figure(GAP, "explains the least of all: 35 % of it and 19 % of the added damping", SOFTENING,
-           lambda: [100 * r[key] for r in _softening("places") if r["place"] == ["wing", "payload"]
-                    for key in ("stiffness_explained", "damping_explained")]),
+           lambda: [_softening_share(["wing", "payload"], key) for key in ("stiffness_explained", "damping_explained")]),
     # README
     Figure(R, "excited 2-15 Hz band", F16, lambda: [2, 15]),
     Figure(R, "That part alone is an NRMSE of 0.132 in the mean", F16, _f16_floor),
