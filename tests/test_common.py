@@ -45,6 +45,7 @@ def all_estimators():
 # about the API, the accuracy tests elsewhere use full settings.
 FAST_SETTINGS = {
     "PNLSSRegressor": {"max_iter": 2},
+    "AboveBandRegressor": {"cutoff": 0.25, "n_taps": 4},
     "DecoupledPNLSSRegressor": {
         "n_branches": 1, "degree": 3, "n_init": 1, "n_points": 50, "max_iter": 2,
         "start_model": PNLSSRegressor(max_iter=2),
