@@ -30,8 +30,8 @@ def test_lagged_holds_each_channel_delayed_circularly_or_from_rest():
     periodic, from_rest = lagged(w, 3, True), lagged(w, 3, False)
     for i in range(2):
         for j in range(3):
-            np.testing.assert_array_equal(periodic[:, i * 3 + j], np.roll(w[:, i], j))
-            np.testing.assert_array_equal(from_rest[:, i * 3 + j], np.r_[np.zeros(j), w[:5 - j, i]])
+            np.testing.assert_array_equal(periodic[:, i, j], np.roll(w[:, i], j))
+            np.testing.assert_array_equal(from_rest[:, i, j], np.r_[np.zeros(j), w[:5 - j, i]])
 
 
 def test_above_cutoff_keeps_exactly_the_lines_above_it():

@@ -38,6 +38,9 @@ from .bla import BLAEstimator
 
 __all__ = ["AboveBandRegressor", "above_cutoff", "lagged"]
 
+# Rows of the FIR design matrix held at once (8192 x 200 taps: 13 MB).
+ROWS_PER_BLOCK = 8192
+
 
 def above_cutoff(signal, cutoff, fs):
     """The content of each channel of one (n_samples, n_channels) signal
@@ -49,16 +52,26 @@ def above_cutoff(signal, cutoff, fs):
 
 
 def lagged(w, n_taps, periodic):
-    """The FIR design matrix of one (n_samples, n_channels) signal: column
-    ``i * n_taps + j`` holds channel ``i`` delayed by ``j`` samples
-    (circularly for a periodic signal in steady state, else from rest)."""
+    """The delays of one (n_samples, n_channels) signal, as a read-only view
+    of shape (n_samples, n_channels, n_taps): ``[t, i, j]`` is channel ``i``
+    at ``t - j`` (circularly for a periodic signal in steady state, else
+    from rest). Its rows reshaped to ``n_channels * n_taps`` columns are the
+    FIR design matrix."""
     n, m = w.shape
     if periodic:
         head = np.take(w, np.arange(-(n_taps - 1), 0), axis=0, mode="wrap")
     else:
         head = np.zeros((n_taps - 1, m))
-    windows = sliding_window_view(np.vstack([head, w]), n_taps, axis=0)  # (n, m, n_taps)
-    return windows[:, :, ::-1].reshape(n, m * n_taps)
+    return sliding_window_view(np.vstack([head, w]), n_taps, axis=0)[:, :, ::-1]
+
+
+def _row_blocks(delays):
+    """The FIR design matrix of ``lagged``'s view, a block of rows at a
+    time: memory stays at ROWS_PER_BLOCK rows, not the record's length."""
+    n = delays.shape[0]
+    for start in range(0, n, ROWS_PER_BLOCK):
+        stop = min(start + ROWS_PER_BLOCK, n)
+        yield start, stop, delays[start:stop].reshape(stop - start, -1)
 
 
 def _quadratic_features(x):
@@ -247,12 +260,14 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         normal, rhs = 0.0, 0.0
         for (_, x, _, periodic), r in zip(parts, residual):
             envelope = _moving_average(np.sum((r / scale) ** 2, axis=1), window, periodic)
-            Q = _quadratic_features(x / self.state_scale_)
-            normal = normal + Q.T @ Q
-            rhs = rhs + Q.T @ envelope
+            for start in range(0, x.shape[0], ROWS_PER_BLOCK):
+                rows = slice(start, start + ROWS_PER_BLOCK)
+                Q = _quadratic_features(x[rows] / self.state_scale_)
+                normal = normal + Q.T @ Q
+                rhs = rhs + Q.T @ envelope[rows]
         return np.linalg.lstsq(normal, rhs, rcond=None)[0]
 
-    def _gated_design(self, x, u_above, periodic):
+    def _gated_delays(self, x, u_above, periodic):
         w = above_cutoff(self._gate(x)[:, None] * u_above, self.cutoff, self.fs)
         return lagged(w, self.n_taps, periodic)
 
@@ -261,9 +276,9 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         the gated out-of-band input and its delays."""
         normal, rhs = 0.0, 0.0
         for (_, x, u_above, periodic), r in zip(parts, residual):
-            A = self._gated_design(x, u_above, periodic)
-            normal = normal + A.T @ A
-            rhs = rhs + A.T @ r
+            for start, stop, A in _row_blocks(self._gated_delays(x, u_above, periodic)):
+                normal = normal + A.T @ A
+                rhs = rhs + A.T @ r[start:stop]
         scale = np.trace(normal) / normal.shape[0]
         if scale == 0:  # no gated input: nothing to fit
             coef = np.zeros_like(rhs)
@@ -272,8 +287,11 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         return coef.reshape(-1, self.n_taps, self.n_outputs_)
 
     def _above_band(self, x, u_above, periodic):
-        design = self._gated_design(x, u_above, periodic)
-        return design @ self.fir_.reshape(-1, self.n_outputs_)
+        out = np.empty((x.shape[0], self.n_outputs_))
+        fir = self.fir_.reshape(-1, self.n_outputs_)
+        for start, stop, A in _row_blocks(self._gated_delays(x, u_above, periodic)):
+            out[start:stop] = A @ fir
+        return out
 
     def predict(self, X):
         """The regressor's simulation plus the gated response above
