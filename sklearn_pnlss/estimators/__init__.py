@@ -1,5 +1,6 @@
-"""The estimators: BLA (linear), polynomial nonlinear state-space, and the
-integrated-output wrapper for outputs that integrate."""
+"""The estimators: BLA (linear), polynomial nonlinear state-space, the
+integrated-output wrapper for outputs that integrate, and the wrapper that
+adds the response above the excited band."""
 from .above_band import AboveBandRegressor
 from .bla import BLAEstimator
 from .decoupled import DecoupledPNLSSRegressor
