@@ -9,7 +9,7 @@ from sklearn.base import BaseEstimator
 from sklearn.frozen import FrozenEstimator
 
 from sklearn_pnlss import AboveBandRegressor, BLAEstimator, IntegratedOutputRegressor
-from sklearn_pnlss.estimators.above_band import above_cutoff, lagged
+from sklearn_pnlss.estimators._gated import above_cutoff, lagged
 from sklearn_pnlss.metrics import nrmse_by_band
 
 CUTOFF = 0.1  # cycles per sample

@@ -27,67 +27,22 @@ linear least squares on top of the fitted state-space model.
 from numbers import Integral, Real
 
 import numpy as np
-from numpy.lib.stride_tricks import sliding_window_view
 from sklearn.base import BaseEstimator, clone
 from sklearn.utils.validation import check_is_fitted
 
 from ..utils.parameters import Interval, validates_parameters
 from ..utils.validation import restore_layout, signal_layout, validate_signals
 from ._base import DynamicRegressorMixin
+from ._gated import above_cutoff, apply_fir, envelope, fit_fir, fit_gate, gate
 from .bla import BLAEstimator
 
 __all__ = ["AboveBandRegressor"]
 
-# Rows of the FIR design matrix held at once (8192 x 200 taps: 13 MB).
-ROWS_PER_BLOCK = 8192
 
-
-def above_cutoff(signal, cutoff, fs):
-    """The content of each channel of one (n_samples, n_channels) signal
-    strictly above ``cutoff`` (zero phase: the DFT of the whole record with
-    the lines at and below ``cutoff`` set to zero)."""
-    spectrum = np.fft.rfft(signal, axis=0)
-    spectrum[np.fft.rfftfreq(signal.shape[0], 1.0 / fs) <= cutoff] = 0.0
-    return np.fft.irfft(spectrum, signal.shape[0], axis=0)
-
-
-def lagged(w, n_taps, periodic):
-    """The delays of one (n_samples, n_channels) signal, as a read-only view
-    of shape (n_samples, n_channels, n_taps): ``[t, i, j]`` is channel ``i``
-    at ``t - j`` (circularly for a periodic signal in steady state, else
-    from rest). Its rows reshaped to ``n_channels * n_taps`` columns are the
-    FIR design matrix."""
-    n, m = w.shape
-    if periodic:
-        head = np.take(w, np.arange(-(n_taps - 1), 0), axis=0, mode="wrap")
-    else:
-        head = np.zeros((n_taps - 1, m))
-    return sliding_window_view(np.vstack([head, w]), n_taps, axis=0)[:, :, ::-1]
-
-
-def _row_blocks(delays):
-    """The FIR design matrix of ``lagged``'s view, a block of rows at a
-    time: memory stays at ROWS_PER_BLOCK rows, not the record's length."""
-    n = delays.shape[0]
-    for start in range(0, n, ROWS_PER_BLOCK):
-        stop = min(start + ROWS_PER_BLOCK, n)
-        yield start, stop, delays[start:stop].reshape(stop - start, -1)
-
-
-def _quadratic_features(x):
+def quadratic_features(x):
     """``[1, x_i x_j (i <= j)]`` of each sample of ``x`` (n_samples, n)."""
     i, j = np.triu_indices(x.shape[1])
     return np.hstack([np.ones((x.shape[0], 1)), x[:, i] * x[:, j]])
-
-
-def _moving_average(e, window, periodic):
-    """Centred moving average of a 1-D signal over ``window`` samples."""
-    kernel = np.ones(window) / window
-    if periodic:
-        half = window // 2
-        padded = np.concatenate([e[-half:] if half else e[:0], e, e[:window - 1 - half]])
-        return np.convolve(padded, kernel, mode="valid")
-    return np.convolve(e, kernel, mode="same")
 
 
 def _state_space_step(regressor):
@@ -235,8 +190,11 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         self.above_band_rms_ = np.sqrt(np.mean(np.vstack(residual) ** 2, axis=0))
         self.state_scale_ = np.sqrt(np.mean(np.vstack([x for _, x, _, _ in parts]) ** 2, axis=0))
         self.state_scale_[self.state_scale_ == 0] = 1.0
-        self.gate_coef_ = self._fit_gate(parts, residual)
-        self.fir_ = self._fit_fir(parts, residual)
+        window = max(1, int(round(self.fs / self.cutoff)))  # one period of the cutoff frequency
+        envelopes = [envelope(r, self.above_band_rms_, window, p) for (_, _, _, p), r in zip(parts, residual)]
+        self.gate_coef_ = fit_gate([x for _, x, _, _ in parts], envelopes, self._features)
+        self.fir_ = fit_fir([self._gated(x, u_above) for _, x, u_above, _ in parts], residual,
+                            [p for _, _, _, p in parts], self.n_taps, self.alpha)
         after = [r - self._above_band(x, u_above, periodic) for (_, x, u_above, periodic), r in zip(parts, residual)]
         before_power = np.maximum(self.above_band_rms_ ** 2, np.finfo(float).tiny)
         self.explained_fraction_ = 1.0 - np.mean(np.vstack(after) ** 2, axis=0) / before_power
@@ -251,50 +209,15 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         states = step.model_.normalised_trajectory([U], step._period() if periodic else None)[:, :-U.shape[1]]
         return y0, states, above_cutoff(U, self.cutoff, self.fs), periodic
 
-    def _gate(self, x):
-        return np.maximum(_quadratic_features(x / self.state_scale_) @ self.gate_coef_, 0.0)
+    def _features(self, x):
+        """The gate's features: the scaled states' quadratic form."""
+        return quadratic_features(x / self.state_scale_)
 
-    def _fit_gate(self, parts, residual):
-        """``q`` by least squares on the out-of-band error's envelope: its
-        power summed over the outputs (each in units of its rms), averaged
-        over one period of the cutoff frequency."""
-        scale = np.where(self.above_band_rms_ > 0, self.above_band_rms_, 1.0)
-        window = max(1, int(round(self.fs / self.cutoff)))
-        normal, rhs = 0.0, 0.0
-        for (_, x, _, periodic), r in zip(parts, residual):
-            envelope = _moving_average(np.sum((r / scale) ** 2, axis=1), window, periodic)
-            for start in range(0, x.shape[0], ROWS_PER_BLOCK):
-                rows = slice(start, start + ROWS_PER_BLOCK)
-                Q = _quadratic_features(x[rows] / self.state_scale_)
-                normal = normal + Q.T @ Q
-                rhs = rhs + Q.T @ envelope[rows]
-        return np.linalg.lstsq(normal, rhs, rcond=None)[0]
-
-    def _gated_delays(self, x, u_above, periodic):
-        w = above_cutoff(self._gate(x)[:, None] * u_above, self.cutoff, self.fs)
-        return lagged(w, self.n_taps, periodic)
-
-    def _fit_fir(self, parts, residual):
-        """The FIR filters by ridge regression of the out-of-band error on
-        the gated out-of-band input and its delays."""
-        normal, rhs = 0.0, 0.0
-        for (_, x, u_above, periodic), r in zip(parts, residual):
-            for start, stop, A in _row_blocks(self._gated_delays(x, u_above, periodic)):
-                normal = normal + A.T @ A
-                rhs = rhs + A.T @ r[start:stop]
-        scale = np.trace(normal) / normal.shape[0]
-        if scale == 0:  # no gated input: nothing to fit
-            coef = np.zeros_like(rhs)
-        else:
-            coef = np.linalg.solve(normal + self.alpha * scale * np.eye(normal.shape[0]), rhs)
-        return coef.reshape(-1, self.n_taps, self.n_outputs_)
+    def _gated(self, x, u_above):
+        return above_cutoff(gate(x, self.gate_coef_, self._features)[:, None] * u_above, self.cutoff, self.fs)
 
     def _above_band(self, x, u_above, periodic):
-        out = np.empty((x.shape[0], self.n_outputs_))
-        fir = self.fir_.reshape(-1, self.n_outputs_)
-        for start, stop, A in _row_blocks(self._gated_delays(x, u_above, periodic)):
-            out[start:stop] = A @ fir
-        return out
+        return apply_fir(self._gated(x, u_above), self.fir_, periodic)
 
     def predict(self, X):
         """The regressor's simulation plus the gated response above

@@ -1,0 +1,104 @@
+"""A signal's content above a cutoff, switched on by a gate, through FIR
+filters: the pieces of :class:`~sklearn_pnlss.AboveBandRegressor` and of the
+gap diagnosis's reading of where a joint knocks.
+
+The response is ``sum_j h_j g(t - j) u_above(t - j)``: ``u_above`` the input's
+content above the cutoff, ``g = max(F c, 0)`` a gate whose features ``F``
+(of the state, or of a connection's relative motion) are fitted by least
+squares to the envelope of the error above the cutoff, and the ``h_j`` by
+ridge regression on that error. Internal: may change without notice.
+"""
+import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
+
+__all__ = ["above_cutoff", "apply_fir", "envelope", "fit_fir", "fit_gate", "gate", "lagged"]
+
+# Rows of a design matrix held at once (8192 x 200 taps: 13 MB).
+ROWS_PER_BLOCK = 8192
+
+
+def above_cutoff(signal, cutoff, fs):
+    """The content of each channel of one (n_samples, n_channels) signal
+    strictly above ``cutoff`` (zero phase: the DFT of the whole record with
+    the lines at and below ``cutoff`` set to zero)."""
+    spectrum = np.fft.rfft(signal, axis=0)
+    spectrum[np.fft.rfftfreq(signal.shape[0], 1.0 / fs) <= cutoff] = 0.0
+    return np.fft.irfft(spectrum, signal.shape[0], axis=0)
+
+
+def lagged(w, n_taps, periodic):
+    """The delays of one (n_samples, n_channels) signal, as a read-only view
+    of shape (n_samples, n_channels, n_taps): ``[t, i, j]`` is channel ``i``
+    at ``t - j`` (circularly for a periodic signal in steady state, else
+    from rest). Its rows reshaped to ``n_channels * n_taps`` columns are the
+    FIR design matrix."""
+    n, m = w.shape
+    if periodic:
+        head = np.take(w, np.arange(-(n_taps - 1), 0), axis=0, mode="wrap")
+    else:
+        head = np.zeros((n_taps - 1, m))
+    return sliding_window_view(np.vstack([head, w]), n_taps, axis=0)[:, :, ::-1]
+
+
+def _row_blocks(n):
+    for start in range(0, n, ROWS_PER_BLOCK):
+        yield slice(start, min(start + ROWS_PER_BLOCK, n))
+
+
+def envelope(error, scale, window, periodic):
+    """Where an (n_samples, n_outputs) error above the cutoff lies in time:
+    its power summed over the outputs, each in units of ``scale``, averaged
+    over ``window`` samples (centred; circularly for a periodic signal)."""
+    power = np.sum((error / np.where(scale > 0, scale, 1.0)) ** 2, axis=1)
+    kernel = np.ones(window) / window
+    if not periodic:
+        return np.convolve(power, kernel, mode="same")
+    half = window // 2
+    wrapped = np.concatenate([power[power.size - half:], power, power[:window - 1 - half]])
+    return np.convolve(wrapped, kernel, mode="valid")
+
+
+def fit_gate(variables, envelopes, features):
+    """The gate's coefficients: ``features(v)`` of each signal's variables
+    ``v`` (n_samples, n) fitted to its envelope by pooled least squares."""
+    normal, rhs = 0.0, 0.0
+    for v, e in zip(variables, envelopes):
+        for rows in _row_blocks(v.shape[0]):
+            F = features(v[rows])
+            normal = normal + F.T @ F
+            rhs = rhs + F.T @ e[rows]
+    return np.linalg.lstsq(normal, rhs, rcond=None)[0]
+
+
+def gate(v, coef, features):
+    """The gate ``max(features(v) @ coef, 0)`` along one signal."""
+    return np.maximum(features(v) @ coef, 0.0)
+
+
+def fit_fir(gated, errors, periodic, n_taps, alpha):
+    """FIR filters (n_inputs, n_taps, n_outputs) by ridge regression of each
+    signal's error on its gated input and the input's delays; ``alpha``
+    relative to the normal matrix's mean diagonal."""
+    normal, rhs = 0.0, 0.0
+    for w, r, p in zip(gated, errors, periodic):
+        delays = lagged(w, n_taps, p)
+        for rows in _row_blocks(w.shape[0]):
+            A = delays[rows].reshape(rows.stop - rows.start, -1)
+            normal = normal + A.T @ A
+            rhs = rhs + A.T @ r[rows]
+    scale = np.trace(normal) / normal.shape[0]
+    if scale == 0:  # nothing gated through: nothing to fit
+        coef = np.zeros_like(rhs)
+    else:
+        coef = np.linalg.solve(normal + alpha * scale * np.eye(normal.shape[0]), rhs)
+    return coef.reshape(-1, n_taps, errors[0].shape[1])
+
+
+def apply_fir(w, fir, periodic):
+    """The FIR filters' output (n_samples, n_outputs) on one gated input."""
+    delays = lagged(w, fir.shape[1], periodic)
+    out = np.empty((w.shape[0], fir.shape[2]))
+    flat = fir.reshape(-1, fir.shape[2])
+    for rows in _row_blocks(w.shape[0]):
+        out[rows] = delays[rows].reshape(rows.stop - rows.start, -1) @ flat
+    return out
