@@ -1,12 +1,11 @@
 """A signal's content above a cutoff, switched on by a gate, through FIR
-filters: the pieces of :class:`~sklearn_pnlss.AboveBandRegressor` and of the
-gap diagnosis's reading of where a joint knocks.
+filters: the pieces of :class:`~sklearn_pnlss.AboveBandRegressor`.
 
 The response is ``sum_j h_j g(t - j) u_above(t - j)``: ``u_above`` the input's
 content above the cutoff, ``g = max(F c, 0)`` a gate whose features ``F``
-(of the state, or of a connection's relative motion) are fitted by least
-squares to the envelope of the error above the cutoff, and the ``h_j`` by
-ridge regression on that error. Internal: may change without notice.
+(of the state) are fitted by least squares to the amplitude envelope of
+the error above the cutoff, and the ``h_j`` by ridge regression on that
+error. Internal: may change without notice.
 """
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
@@ -46,16 +45,17 @@ def _row_blocks(n):
 
 
 def envelope(error, scale, window, periodic):
-    """Where an (n_samples, n_outputs) error above the cutoff lies in time:
+    """Where an (n_samples, n_outputs) error above the cutoff lies in time,
+    as an amplitude (what a gate on the input scales): the square root of
     its power summed over the outputs, each in units of ``scale``, averaged
     over ``window`` samples (centred; circularly for a periodic signal)."""
     power = np.sum((error / np.where(scale > 0, scale, 1.0)) ** 2, axis=1)
     kernel = np.ones(window) / window
     if not periodic:
-        return np.convolve(power, kernel, mode="same")
+        return np.sqrt(np.convolve(power, kernel, mode="same"))
     half = window // 2
     wrapped = np.concatenate([power[power.size - half:], power, power[:window - 1 - half]])
-    return np.convolve(wrapped, kernel, mode="valid")
+    return np.sqrt(np.convolve(wrapped, kernel, mode="valid"))
 
 
 def fit_gate(variables, envelopes, features):
