@@ -176,9 +176,9 @@ if train is not None:
 # says when the joint is in the knocking regime.
 # :class:`~sklearn_pnlss.AboveBandRegressor` models the error above
 # ``cutoff`` as the force's content there, switched on by a gate (a
-# quadratic form of the state, fitted to where that error is), through FIR
-# filters: two linear least-squares fits on top of the decoupled model,
-# kept as it is (:class:`~sklearn.frozen.FrozenEstimator`). Level 2, where
+# quadratic form of the state, fitted to that error's amplitude envelope),
+# through FIR filters: two linear least-squares fits on top of the
+# decoupled model, kept as it is (:class:`~sklearn.frozen.FrozenEstimator`). Level 2, where
 # the joint does not knock and the gate stays shut, keeps its figures.
 if train is not None:
     from sklearn.frozen import FrozenEstimator
@@ -216,8 +216,8 @@ if train is not None:
 #   Most of that error lies above the excited band (the figure above): the
 #   response of modes that only the rattling joint excites, an NRMSE of
 #   about 0.13 in the mean over the test levels and outputs on its own.
-#   The gated force explains about half of it at the drive point and less
-#   than a fifth on the payload, where the impacts are sharpest; a plain
+#   The gated force explains about two thirds of it at the drive point and
+#   a sixth on the payload, where the impacts are sharpest; a plain
 #   linear map of the force there would bring level 6 further and spoil
 #   level 2, whose force carries content above the band that the structure
 #   does not answer (``force_above_band`` in ``benchmarks/results/f16.json``).
