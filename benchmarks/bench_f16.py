@@ -297,9 +297,9 @@ def above_band(row, model, X, y, test):
     name = row["model"]["estimator"]
     settings = {"estimator_inside": name, **{k: v for k, v in row["model"].items() if k != "estimator"},
                 "cutoff_hz": wrapped.cutoff, "n_taps": wrapped.n_taps}
-    extra = {"n_params": row["n_params"] + wrapped.fir_.size + wrapped.gate_coef_.size,
-             "n_nonlinear_params": row["n_nonlinear_params"], "n_above_band_params": wrapped.fir_.size
-             + wrapped.gate_coef_.size, "above_band_explained_train": wrapped.explained_fraction_.tolist()}
+    added = wrapped.fir_.size + wrapped.gate_coef_.size
+    extra = {"n_params": row["n_params"] + added, "n_nonlinear_params": row["n_nonlinear_params"],
+             "n_above_band_params": added, "above_band_explained_train": wrapped.explained_fraction_.tolist()}
     return entry(f"AboveBandRegressor({name})", settings, wrapped, test, fit_s, extra)
 
 

@@ -26,6 +26,7 @@ the ``h_j`` fitted by ridge regression on that residual. Both fits are
 linear least squares on top of the fitted state-space model.
 """
 from numbers import Integral, Real
+from typing import NamedTuple
 
 import numpy as np
 from sklearn.base import BaseEstimator, clone
@@ -44,6 +45,17 @@ def quadratic_features(x):
     """``[1, x_i x_j (i <= j)]`` of each sample of ``x`` (n_samples, n)."""
     i, j = np.triu_indices(x.shape[1])
     return np.hstack([np.ones((x.shape[0], 1)), x[:, i] * x[:, j]])
+
+
+class _Signal(NamedTuple):
+    """One input signal as the model sees it: the regressor's prediction,
+    its states (normalised units), the input's content above the cutoff,
+    and whether the signal is periodic (steady state, circular FIRs)."""
+
+    prediction: np.ndarray
+    states: np.ndarray
+    input_above: np.ndarray
+    periodic: bool
 
 
 def _state_space_step(regressor):
@@ -186,39 +198,37 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         self.n_outputs_ = y_list[0].shape[1]
         self._y_was_1d = signal_layout(y).kind == "1d"
 
-        parts = [self._parts(U) for U in X_list]
-        residual = [above_cutoff(Y - y0, self.cutoff, self.fs) for (y0, _, _, _), Y in zip(parts, y_list)]
+        signals = [self._signal(U) for U in X_list]
+        residual = [above_cutoff(Y - s.prediction, self.cutoff, self.fs) for s, Y in zip(signals, y_list)]
         self.above_band_rms_ = np.sqrt(np.mean(np.vstack(residual) ** 2, axis=0))
-        self.state_scale_ = np.sqrt(np.mean(np.vstack([x for _, x, _, _ in parts]) ** 2, axis=0))
+        self.state_scale_ = np.sqrt(np.mean(np.vstack([s.states for s in signals]) ** 2, axis=0))
         self.state_scale_[self.state_scale_ == 0] = 1.0
         window = max(1, int(round(self.fs / self.cutoff)))  # one period of the cutoff frequency
-        envelopes = [envelope(r, self.above_band_rms_, window, p) for (_, _, _, p), r in zip(parts, residual)]
-        self.gate_coef_ = fit_gate([x for _, x, _, _ in parts], envelopes, self._features)
-        self.fir_ = fit_fir([self._gated(x, u_above) for _, x, u_above, _ in parts], residual,
-                            [p for _, _, _, p in parts], self.n_taps, self.alpha)
-        after = [r - self._above_band(x, u_above, periodic) for (_, x, u_above, periodic), r in zip(parts, residual)]
+        envelopes = [envelope(r, self.above_band_rms_, window, s.periodic) for s, r in zip(signals, residual)]
+        self.gate_coef_ = fit_gate([s.states for s in signals], envelopes, self._features)
+        gated = [self._gated(s) for s in signals]
+        self.fir_ = fit_fir(gated, residual, [s.periodic for s in signals], self.n_taps, self.alpha)
+        after = [r - apply_fir(g, self.fir_, s.periodic) for s, g, r in zip(signals, gated, residual)]
         before_power = np.maximum(self.above_band_rms_ ** 2, np.finfo(float).tiny)
         self.explained_fraction_ = 1.0 - np.mean(np.vstack(after) ** 2, axis=0) / before_power
         return self
 
-    def _parts(self, U):
-        """For one input signal: the regressor's prediction, its states, the
-        input above ``cutoff``, and whether the signal is periodic."""
+    def _signal(self, U):
+        """One input signal as the model sees it (see ``_Signal``)."""
         step = _state_space_step(self.regressor_)
         periodic = step._signal_is_periodic(U.shape[0])
-        y0 = np.asarray(self.regressor_.predict(U)).reshape(U.shape[0], -1)
+        prediction = np.asarray(self.regressor_.predict(U)).reshape(U.shape[0], -1)
         states = step.model_.normalised_trajectory([U], step._period() if periodic else None)[:, :-U.shape[1]]
-        return y0, states, above_cutoff(U, self.cutoff, self.fs), periodic
+        return _Signal(prediction, states, above_cutoff(U, self.cutoff, self.fs), periodic)
 
     def _features(self, x):
         """The gate's features: the scaled states' quadratic form."""
         return quadratic_features(x / self.state_scale_)
 
-    def _gated(self, x, u_above):
-        return above_cutoff(gate(x, self.gate_coef_, self._features)[:, None] * u_above, self.cutoff, self.fs)
-
-    def _above_band(self, x, u_above, periodic):
-        return apply_fir(self._gated(x, u_above), self.fir_, periodic)
+    def _gated(self, signal):
+        """The input above ``cutoff``, gated by the states (and kept above it)."""
+        g = gate(signal.states, self.gate_coef_, self._features)
+        return above_cutoff(g[:, None] * signal.input_above, self.cutoff, self.fs)
 
     def predict(self, X):
         """The regressor's simulation plus the gated response above
@@ -236,6 +246,6 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         X_list, _, layout = validate_signals(self, X, reset=False, min_samples=1)
         out = []
         for U in X_list:
-            y0, x, u_above, periodic = self._parts(U)
-            out.append(y0 + self._above_band(x, u_above, periodic))
+            signal = self._signal(U)
+            out.append(signal.prediction + apply_fir(self._gated(signal), self.fir_, signal.periodic))
         return restore_layout(out, layout, squeeze_1d=self._y_was_1d)
