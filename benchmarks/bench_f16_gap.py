@@ -84,7 +84,10 @@ def main(argv=None):
                nominal_train_error=gap.nominal_train_error_.tolist(),
                ranking=[dict(place=c.place, law=c.law.name, explained=c.explained,
                              nonlinear_gain=c.nonlinear_gain) for c in report.ranking],
-               fits=fits, free_participation=free)
+               fits=fits, free_participation=free,
+               entry=dict(place=gap.entry_.place, snr_db=gap.entry_.snr_db, direction=gap.entry_.direction.tolist(),
+                          band=gap.entry_.band, explained=[dict(place=p, share=v)
+                                                           for p, v in gap.entry_.explained.items()]))
     RESULTS.mkdir(exist_ok=True)
     path = RESULTS / "f16_gap.json"
     path.write_text(json.dumps(out, indent=1, default=str))

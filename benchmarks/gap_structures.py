@@ -186,7 +186,7 @@ def run_case(effect, nominal_kind, seed):
     else:
         ok = report.effect_found and right_place and report.law == effect
     row.update(got_place=report.place, got_law=report.law, effect_found=report.effect_found, ok=bool(ok),
-               modal_record=gap.modal_record_,
+               modal_record=gap.modal_record_, entry=gap.entry_.place, entry_snr_db=round(gap.entry_.snr_db, 1),
                seconds=seconds, closure=report.closure.tolist(), nominal_error=report.nominal_error.tolist(),
                left_over_noise_db=report.left_over_noise_db.tolist(),
                ranking=[(c.place, c.law.name, round(c.explained, 4)) for c in report.ranking])

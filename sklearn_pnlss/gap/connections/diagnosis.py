@@ -25,6 +25,7 @@ from ...physics.structure import Structure
 from ...utils.parameters import Interval, Options, validates_parameters
 from ...utils.validation import as_signal_list
 from ..modal_nominal import modal_nominal
+from .entry import read_entry
 from .locator import ConnectionLocator, band_and_weights
 from .recalibrate import recalibrated
 from .refine import BandError, fit_connection
@@ -93,6 +94,9 @@ class StructuralGapReport:
         The factor on each of a lumped nominal's masses, springs and modal
         damping ratios that ``recalibrate`` fitted on the lowest training
         level (None: not updated so).
+    entry : EntryReading or None
+        Where the training records' content above the band enters (see
+        :mod:`~sklearn_pnlss.gap.connections.entry`).
     """
 
     effect_found: bool
@@ -109,6 +113,7 @@ class StructuralGapReport:
     left_over_noise_db: np.ndarray
     ranking: list
     nominal_update: dict = None
+    entry: object = None
 
     @property
     def place_name(self):
@@ -137,6 +142,8 @@ class StructuralGapReport:
                          f"{n:.0f} dB over the noise left")
         lines.append("  places by the share of the training error their force explains: " + ", ".join(
             f"{c.place_name} {c.explained:.0%}" for c in self.ranking))
+        if self.entry is not None:
+            lines.append("  " + str(self.entry))
         changed = {k: v for k, v in (self.nominal_update or {}).items() if abs(np.log(v)) >= UPDATE_SHOWN}
         if changed:
             lines.append("  the nominal updated on the lowest level first: " + ", ".join(
@@ -150,9 +157,10 @@ class StructuralGapDiagnosis(BaseEstimator):
 
     The nominal's error is first read connection by connection
     (:class:`~sklearn_pnlss.gap.connections.locator.ConnectionLocator`,
-    no simulation); at the ``n_places`` places whose force explains most,
-    every force law, and a linear stiffness and damping change, are then
-    simulated and fitted by simulation error on the training records; the
+    no simulation); at the ``n_places`` places whose force explains most
+    (or, where the records carry content above the excited band clearly,
+    at the place it enters: ``entry_``), every force law, and a linear
+    stiffness and damping change, are then simulated and fitted by simulation error on the training records; the
     law that leaves the least error is the diagnosis when it beats the
     linear change clearly (``MAX_ERROR_RATIO``).
 
@@ -213,6 +221,11 @@ class StructuralGapDiagnosis(BaseEstimator):
         Every simulated law, least training error first.
     best_ : ConnectionFit
         The nonlinear law that leaves the least training error.
+    entry_ : EntryReading
+        Where the content above the band of the training records enters
+        (:func:`~sklearn_pnlss.gap.connections.entry.read_entry`); where it
+        names a place, the laws are simulated there only, else at the
+        ``n_places`` places the locator ranks first.
     linear_ : dict
         The linear change fitted at each simulated place (a ConnectionFit).
     effect_found_ : bool
@@ -327,6 +340,13 @@ class StructuralGapDiagnosis(BaseEstimator):
         self.nominal_train_error_ = error.relative(error.simulate(self.reference_))
         self.recalibrated_train_error_ = error.relative(error.simulate(self.nominal_))
         places = list(dict.fromkeys(c.place for c in self.locator_.ranking_))[:self.n_places]
+        band_top = spectra.freqs[self.locator_.lines_].max()
+        self.entry_ = read_entry(spectra, self.sensors, band_top, self.locator_.places_)
+        if self.entry_.clear:
+            # the force's own points, read off the content above the band,
+            # outrank the band's reading: in the band every place's motion
+            # is a mix of the same few modes (see the module entry)
+            places = [self.entry_.place]
         fits, self.linear_ = [], {}
         for place in places:
             scales = self.locator_.rms_[place]
@@ -472,7 +492,7 @@ class StructuralGapDiagnosis(BaseEstimator):
             linear_error=error.relative(linear), nominal_nrmse=_per_output(nominal, error.measured),
             connection_nrmse=_per_output(connection, error.measured), closure=1.0 - e1**2 / e0**2,
             left_over_noise_db=10 * np.log10(left / noise), ranking=list(self.locator_.ranking_),
-            nominal_update=self.updated_elements_)
+            nominal_update=self.updated_elements_, entry=self.entry_)
 
 
 def _simulated(error, structure):
