@@ -160,9 +160,10 @@ class StructuralGapDiagnosis(BaseEstimator):
     no simulation); at the ``n_places`` places whose force explains most
     (or, where the records carry content above the excited band clearly,
     at the place it enters: ``entry_``), every force law, and a linear
-    stiffness and damping change, are then simulated and fitted by simulation error on the training records; the
-    law that leaves the least error is the diagnosis when it beats the
-    linear change clearly (``MAX_ERROR_RATIO``).
+    stiffness and damping change, are then simulated and fitted by
+    simulation error on the training records; the law that leaves the
+    least error is the diagnosis when it beats the linear change clearly
+    (``MAX_ERROR_RATIO``).
 
     Parameters
     ----------
@@ -269,6 +270,8 @@ class StructuralGapDiagnosis(BaseEstimator):
     >>> report = gap.report(*records([20.0]))
     >>> report.effect_found, report.place, report.law
     (True, ('middle', 'tip'), 'coulomb_friction')
+    >>> gap.entry_.place  # read off the content above the band (41-100 Hz)
+    ('middle', 'tip')
     >>> bool(report.closure[0] > 0.99), round(report.parameters["fc"], 1)
     (True, 2.0)
     """
