@@ -14,7 +14,6 @@ were set on 3000-3015 and 5000-5009). Writes ``results/gap_entry.json``.
     python benchmarks/gap_entry.py [--seeds 24] [--first-seed 7000]
 """
 import argparse
-import json
 import sys
 import time
 import warnings
@@ -24,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _bench_utils import RESULTS, header  # noqa: E402
+from _bench_utils import RESULTS, header, write_results  # noqa: E402
 from gap_structures import EFFECTS, FS, PERIOD, make_case  # noqa: E402
 
 from sklearn_pnlss.gap.connections.entry import PAIR_MARGIN, SNR_DB, read_entry  # noqa: E402
@@ -77,10 +76,7 @@ def main(argv=None):
           f"{gains['pair_min']:.3f} for a pair (PAIR_MARGIN {PAIR_MARGIN})")
     out = dict(header(), args=vars(args), summary=summary, pair_gain=gains,
                median_read_seconds=float(np.median([r["seconds"] for r in rows])), rows=rows)
-    RESULTS.mkdir(exist_ok=True)
-    path = RESULTS / "gap_entry.json"
-    path.write_text(json.dumps(out, indent=1, default=str))
-    print(f"written {path}")
+    write_results(out, RESULTS / "gap_entry.json")
     return 0
 
 
