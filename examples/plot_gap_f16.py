@@ -26,7 +26,7 @@ gap closes once that connection is simulated.
    places that explain most) and fits them by simulation error.
 3. The report reads the chosen connection on the test levels 2, 4 and 6.
 
-The whole run takes about seven minutes on two cores (the benchmark
+The whole run takes about four minutes on two cores (the benchmark
 ``benchmarks/bench_f16_gap.py`` repeats it and records the time). The
 data are not shipped with the library: set ``SKLEARN_PNLSS_F16_DATA`` to
 the folder of the benchmark's ``F16Data_*.mat`` files (see

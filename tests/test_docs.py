@@ -836,7 +836,7 @@ FIGURES = [
            FAM_S, lambda: [*_family_s(), 90, _results("gap_withheld_family_s")["summary"]["null_cases"]]),
     Figure(R, "A diagnosis took 33 s\nat the median with the modes read off the records, run alone on 2 cores\n"
               "(the target: under 60 s)", FAM_S, lambda: [_family_s_median("modal"), 2, 60]),
-    Figure(R, "425 s) it finds a joint", F16_GAP, lambda: [_f16_gap("seconds")]),
+    Figure(R, "233 s) it finds a joint", F16_GAP, lambda: [_f16_gap("seconds")]),
     Figure(R, "closing 78 %, 99 % and 99 % of the nominal's squared error on test levels 2, 4 and 6", F16_GAP,
            lambda: [*(100 * c for c in _f16_gap("closure")), 2, 4, 6]),
     Figure(R, "the right place in 93 of 96 cases of four laws, none wrong", ENTRY, lambda: _entry_right()),
@@ -910,7 +910,7 @@ FIGURES = [
     Figure(GAP, "1 a loop that softens alike both ways, 4 the Bouc-Wen benchmark's shape",
            "gap.connections.laws: UNLOADING_RATES", lambda: list(_laws().UNLOADING_RATES[1:])),
     Figure(GAP, "a dry friction under a nominal 10-30 % off was read as such a loop", FAM_S, lambda: [10, 30]),
-    Figure(GAP, "levels 2, 4 and 6, in 425 s on 2 cores", F16_GAP, lambda: [2, 4, 6, _f16_gap("seconds"), 2]),
+    Figure(GAP, "levels 2, 4 and 6, in 233 s on 2 cores", F16_GAP, lambda: [2, 4, 6, _f16_gap("seconds"), 2]),
     Figure(GAP, "ranks the wing sensor's place first (96 % of the training error explained against the payload's 94 %)",
            F16_GAP, lambda: [100 * _f16_gap("ranking")[0]["explained"], 100 * _f16_place("explained", ["payload", None])]
            if _f16_gap("ranking")[0]["place"] == ["wing", None] else [None]),
