@@ -66,6 +66,16 @@ def test_a_linear_structure_gives_no_reading():
     assert "no place read" in str(reading)
 
 
+def test_a_noise_free_linear_simulation_gives_no_reading():
+    """Its content above the band is rounding, 1e-26 of the band's power:
+    credited the locator's noise floor, it stands far below it."""
+    sp, sensors = spectra([], noise=0.0)
+    reading = read_entry(sp, sensors, TOP, PLACES)
+    assert reading.place is None and reading.snr_db < -100
+    sp, sensors = spectra([Connection(DeadZoneSpring(2e5, 2e-4), "middle", "tip")], noise=0.0)
+    assert read_entry(sp, sensors, TOP, PLACES).place == ("middle", "tip")
+
+
 def test_displacement_sensors_read_as_accelerations():
     """The same pair from displacements (less noise: a displacement sensor
     sees the content above the band 40 dB smaller against its own rms)."""

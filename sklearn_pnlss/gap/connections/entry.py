@@ -35,6 +35,7 @@ from itertools import combinations
 import numpy as np
 
 from ...physics.structure import SENSOR_KINDS
+from .locator import NOISE_FLOOR
 
 __all__ = ["EntryReading", "read_entry"]
 
@@ -145,11 +146,16 @@ def read_entry(spectra, sensors, band_top, places):
         return EntryReading(None, np.zeros(len(points)), -np.inf, {}, record, band)
     factor = _to_acceleration(freqs[lines], sensors)
     Y = spectra.Y[record, lines] * factor
-    noise = spectra.Y_noise[record, lines] * np.abs(factor) ** 2
+    # noise-free records (a simulation) are credited the locator's floor,
+    # relative to each sensor's power in the band: a linear simulation's
+    # rounding above the band is no content
+    in_band = spectra.Y[record, (freqs > 0) & (freqs <= band_top)]
+    floor = NOISE_FLOOR * np.mean(np.abs(in_band) ** 2, axis=0)
+    noise = np.maximum(spectra.Y_noise[record, lines], floor) * np.abs(factor) ** 2
     power = Y.conj().T @ Y
     noise_power = np.sum(noise, axis=0)
     snr_db = 10 * np.log10(np.trace(power).real / max(np.sum(noise_power), np.finfo(float).tiny))
-    values, vectors = np.linalg.eigh(power - np.diag(noise_power))
+    _, vectors = np.linalg.eigh(power - np.diag(noise_power))
     leading = vectors[:, -1]
     leading = leading * np.exp(-1j * np.angle(leading[np.argmax(np.abs(leading))]))
     direction = leading.real / np.linalg.norm(leading.real)
