@@ -41,16 +41,13 @@ def read_case(effect, seed):
     start = time.perf_counter()
     reading = read_entry(spectra, case["sensors"], BAND_TOP, [*combinations(points, 2), *((p, None) for p in points)])
     seconds = time.perf_counter() - start
-    single = max((p for p in reading.explained if p[1] is None), key=reading.explained.get)
-    pair = max((p for p in reading.explained if p[1] is not None), key=reading.explained.get, default=None)
-    pair_gain = None if pair is None else reading.explained[pair] - reading.explained[single]
     if reading.place is None:
         outcome = "not read"
     else:
         outcome = "right" if effect is not None and set(reading.place) == set(case["joint"]) else "wrong"
     return dict(effect=effect, seed=seed, joint=case["joint"], sensors=points, n_dof=case["n_dof"],
                 place=reading.place, snr_db=round(reading.snr_db, 1), direction=np.round(reading.direction, 3).tolist(),
-                pair_gain=pair_gain, outcome=outcome, seconds=seconds)
+                pair_gain=reading.pair_gain, outcome=outcome, seconds=seconds)
 
 
 def main(argv=None):

@@ -29,7 +29,7 @@ cubic-spring and quadratic-damping cases, none wrong, 3 not read; no place
 read on the 24 linear ones, nor on 24 with a Bouc-Wen hysteresis, whose
 smooth loop makes too little content there.
 """
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from itertools import combinations
 
 import numpy as np
@@ -88,6 +88,19 @@ class EntryReading:
     @property
     def clear(self):
         return self.place is not None
+
+    def best(self, grounded):
+        """The candidate place that holds most of the direction, among the
+        points to the ground (``grounded``) or among the pairs; None if
+        there is none."""
+        return max((p for p in self.explained if (p[1] is None) == grounded), key=self.explained.get, default=None)
+
+    @property
+    def pair_gain(self):
+        """What the best pair of points holds of the direction over the best
+        single point (``PAIR_MARGIN`` is its threshold); None without both."""
+        single, pair = self.best(True), self.best(False)
+        return None if single is None or pair is None else self.explained[pair] - self.explained[single]
 
     def __str__(self):
         shape = ", ".join(f"{v:+.2f}" for v in self.direction)
@@ -162,13 +175,9 @@ def read_entry(spectra, sensors, band_top, places):
     index = {p: i for i, p in enumerate(points)}
     readable = [tuple(p) for p in places if all(q is None or q in index for q in p)]
     explained = {p: float(_share(direction, index, p)) for p in readable}
-    single = [p for p in readable if p[1] is None]
-    pairs = [p for p in readable if p[1] is not None]
-    place = max(single, key=explained.get) if single else None
-    if pairs:
-        pair = max(pairs, key=explained.get)
-        if place is None or explained[pair] - explained[place] > PAIR_MARGIN:
-            place = pair
-    if place is not None and (snr_db < SNR_DB or explained[place] < MIN_EXPLAINED):
-        place = None
-    return EntryReading(place, direction, float(snr_db), explained, record, band)
+    reading = EntryReading(None, direction, float(snr_db), explained, record, band)
+    single, pair, gain = reading.best(True), reading.best(False), reading.pair_gain
+    place = pair if single is None or (gain is not None and gain > PAIR_MARGIN) else single
+    if place is None or snr_db < SNR_DB or explained[place] < MIN_EXPLAINED:
+        return reading
+    return replace(reading, place=place)
