@@ -20,6 +20,8 @@ DEFAULT_DATA = Path(os.environ.get("SKLEARN_PNLSS_DATA", REPO.parent / "shared" 
 def header():
     """Date, machine and library versions for a results file."""
     import numba
+    import scipy
+    import sklearn
 
     import sklearn_pnlss
 
@@ -31,6 +33,8 @@ def header():
             "cpu_count": os.cpu_count(),
             "numpy": np.__version__,
             "numba": numba.__version__,
+            "scipy": scipy.__version__,
+            "scikit-learn": sklearn.__version__,
             "sklearn_pnlss": sklearn_pnlss.__version__,
         },
     }
@@ -76,8 +80,18 @@ def score_test_signals(model, data):
     return out
 
 
+def _plain(value):
+    """numpy scalars and arrays as JSON numbers and lists; anything else
+    (a place's tuple is already a list) as its text."""
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    return str(value)
+
+
 def write_results(results, output):
     output = Path(output)
     output.parent.mkdir(parents=True, exist_ok=True)
-    output.write_text(json.dumps(results, indent=2) + "\n")
+    output.write_text(json.dumps(results, indent=2, default=_plain) + "\n")
     print(f"written {output}")

@@ -12,13 +12,12 @@ read down to 10 dB and at the default 20 dB); writes
     python benchmarks/bench_f16_gap.py [--data PATH]
 """
 import argparse
-import json
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
-from _bench_utils import REPO, RESULTS, header
+from _bench_utils import REPO, RESULTS, header, write_results
 
 from sklearn_pnlss.datasets import load_f16
 from sklearn_pnlss.gap import ConnectionLocator, StructuralGapDiagnosis, modal_nominal
@@ -88,10 +87,8 @@ def main(argv=None):
                entry=dict(place=gap.entry_.place, snr_db=gap.entry_.snr_db, direction=gap.entry_.direction.tolist(),
                           band=gap.entry_.band, explained=[dict(place=p, share=v)
                                                            for p, v in gap.entry_.explained.items()]))
-    RESULTS.mkdir(exist_ok=True)
-    path = RESULTS / "f16_gap.json"
-    path.write_text(json.dumps(out, indent=1, default=str))
-    print(f"{seconds:.0f} s in all; written {path}")
+    print(f"{seconds:.0f} s in all")
+    write_results(out, RESULTS / "f16_gap.json")
     return 0
 
 
