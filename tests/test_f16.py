@@ -204,10 +204,10 @@ def test_bla_of_the_four_levels_is_continuous_in_the_data(f16_dir):
     rounding difference between machines) left the model's test error as
     it was (mean NRMSE over levels 2, 4, 6: 0.425 and 0.432), and neither
     model's gain outside the band is far above the largest measured at the
-    lines (1.004 times it at most). Before the kept fit had to meet the refinement's
-    constraints, the unchanged data kept a free fit with a 21.7 Hz
-    resonance 2.7 times above the measured gain (test NRMSE 0.57, the
-    perturbed data 0.43), from which the decoupled model tested 0.246
+    lines (1.004 times it at most). Before the kept fit had to meet the
+    refinement's constraints, the unchanged data kept a free fit with a
+    21.7 Hz resonance 2.7 times above the measured gain (test NRMSE 0.57,
+    the perturbed data 0.43), from which the decoupled model tested 0.246
     against 0.189."""
     from sklearn_pnlss import BLAEstimator
     from sklearn_pnlss.statespace.linear import frequency_response
