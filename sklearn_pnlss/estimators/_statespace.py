@@ -10,7 +10,7 @@ from numbers import Integral, Real
 import numpy as np
 from sklearn.utils.validation import check_is_fitted
 
-from ..statespace.fitting import FitSettings, simulation_objectives
+from ..statespace.fitting import FitSettings, relative_weights, simulation_objectives
 from ..statespace.model_base import DivergenceError
 from ..statespace.scaled import normalised_linear_start
 from ..utils.handover import detach_stage
@@ -25,7 +25,7 @@ FIT_PARAMETER_CONSTRAINTS = {
     "range_margin": [Interval(Real, 0, None, closed="left")],
     "period": [Interval(Integral, 2, None, closed="left"), None],
     "average_periods": ["boolean"],
-    "weighting": [None, Options(str, {"band", "noise"})],
+    "weighting": [None, Options(str, {"relative", "band", "noise"})],
     "band": [tuple, list, None],
     "max_iter": [Interval(Integral, 0, None, closed="left")],
     "tol": [Interval(Real, 0, None, closed="left")],
@@ -69,7 +69,8 @@ class StateSpaceRegressorBase(SignalRegressorBase):
         time_weight : signals or None, default=None
             Non-negative weight of the squared error at each sample, in the
             layout of ``y`` (with n_outputs channels, or one channel for all
-            outputs). Only with ``weighting=None``.
+            outputs). Only with the time-domain weightings (``weighting``
+            None or "relative", which multiplies it).
 
         Returns
         -------
@@ -80,6 +81,8 @@ class StateSpaceRegressorBase(SignalRegressorBase):
         self.period_ = self._handed_period(stage)
         settings = self._fit_settings()
         weights = self._check_time_weight(time_weight, y_list)
+        if self.weighting == "relative":
+            weights = relative_weights(y_list, weights)
         val = self._check_validation(X_val, y_val)
         start = self._fit_start(stage, X_list, y_list, val, weights)
         objectives = simulation_objectives(start, X_list, y_list, settings, weights)
@@ -126,10 +129,10 @@ class StateSpaceRegressorBase(SignalRegressorBase):
     def _check_time_weight(self, time_weight, y_list):
         if time_weight is None:
             return None
-        if self.weighting is not None:
+        if self.weighting not in (None, "relative"):
             raise ValueError(
                 f"time_weight is a time-domain weighting, but weighting={self.weighting!r} "
-                "weights in frequency; pass one of them."
+                "weights in frequency; pass one of them (or weighting='relative')."
             )
         w_list, _ = as_signal_list(time_weight, name="time_weight", min_samples=1)
         p = y_list[0].shape[1]

@@ -67,9 +67,13 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         power and the cost drop by the number of periods, and each iteration
         is that many times cheaper. Set False to fit every period (for
         instance when the first periods are not yet in steady state).
-    weighting : {None, "band", "noise"}, default=None
+    weighting : {None, "relative", "band", "noise"}, default=None
         Weighting of the simulation error. None: time domain, all samples
-        (times ``time_weight`` when given to :meth:`fit`). "band": frequency
+        (times ``time_weight`` when given to :meth:`fit`). "relative": time
+        domain, each training signal's error relative to its own output
+        power, per output, so that records of different amplitude (the
+        levels of a test campaign) count alike, as NRMSE scores them; with
+        signals of one level the same as None. "band": frequency
         domain, uniform weight on the DFT bins of ``band``. "noise":
         frequency domain, each bin of ``band`` weighted by the inverse noise
         variance of the output, estimated from the spread over the periods

@@ -29,7 +29,8 @@ from .objective import SimulationError
 from .segments import make_segments, transient_length
 
 __all__ = [
-    "AMPLIFIED_VALIDATION", "FitSettings", "LMFit", "iteration_listener", "optimise", "simulation_objectives",
+    "AMPLIFIED_VALIDATION", "FitSettings", "LMFit", "iteration_listener", "optimise", "relative_weights",
+    "simulation_objectives",
     "trusted_model",
 ]
 
@@ -144,11 +145,37 @@ def simulation_objectives(start, X_list, y_list, settings, time_weights=None):
     return stages
 
 
+def relative_weights(y_list, time_weights=None):
+    """Time weights that make each signal's squared error relative to its
+    own output power, per output (``weighting="relative"``), times
+    ``time_weights`` when given.
+
+    Stacked records of different amplitude (the test levels of a structure)
+    then count alike, as the benchmarks' NRMSE scores them; unweighted, the
+    cost is the largest level's, and a model may fit the quiet ones badly
+    (on the F-16's levels 1, 3, 5 and 7, level 7 carries 21 to 37 times
+    level 1's power, by output). The weights are scaled by the mean power over
+    the signals: with one signal (or signals of one level) nothing changes.
+    """
+    power = np.array([np.var(Y, axis=0) for Y in y_list])  # (n_signals, n_outputs)
+    silent = np.argwhere(power <= 0)
+    if silent.size:
+        i, k = silent[0]
+        raise ValueError(
+            f"weighting='relative' divides each signal's error by its output power, but output {k} of "
+            f"training signal {i} is constant; drop that signal or use weighting=None."
+        )
+    scale = power.mean(axis=0) / power
+    if time_weights is None:
+        return [np.broadcast_to(s, Y.shape) for s, Y in zip(scale, y_list)]
+    return [w * s for w, s in zip(time_weights, scale)]
+
+
 def frequency_weight(Xn, yn, settings):
     """Callable giving the weight per DFT bin of a periodic segment that
     averages ``n_averaged`` periods, or None (time domain)."""
     weighting, period, band = settings.weighting, settings.period, settings.band
-    if weighting is None:
+    if weighting in (None, "relative"):  # time-domain weightings
         return None
     if period is None or not all(is_periodic(U.shape[0], period) for U in Xn):
         raise ValueError(
