@@ -6,7 +6,7 @@ PNLSS iteration goes, beside the published figures.
 
     python benchmarks/bench_f16.py [--data-dir DIR] [--states 10]
         [--max-iter 20] [--n-jobs 1] [--decoupled 3:3 5:5 3:3:18@1 ...]
-        [--decoupled-iter 50] [--n-init 2] [--cpd] [--no-pnlss]
+        [--decoupled-iter 50] [--n-init 2] [--weighting relative|none] [--cpd] [--no-pnlss]
         [--select [--select-states 18] [--select-draws 1 2]] [--above-band]
         [--output FILE]
 
@@ -310,9 +310,9 @@ def fit_pnlss(args, bla, X, y, test):
 
     n, rows = args.states, []
     settings = {"n_states": n, "degrees": (2, 3), "variables": "states", "max_iter": args.max_iter,
-                "n_jobs": args.n_jobs}
+                "n_jobs": args.n_jobs, "weighting": args.weighting}
     pnlss = PNLSSRegressor(n, degrees=(2, 3), variables="states", period=8192, max_iter=args.max_iter,
-                           n_jobs=args.n_jobs, tol=0.0)
+                           n_jobs=args.n_jobs, tol=0.0, weighting=args.weighting)
     with timers() as times:
         t0 = time.perf_counter()
         pnlss.fit(bla.transform(X), y)
@@ -336,9 +336,10 @@ def fit_pnlss(args, bla, X, y, test):
     }))
     if args.cpd:
         dsettings = {"n_states": n, "n_branches": 3, "degree": 3, "init": "cpd", "n_init": args.n_init,
-                     "max_iter": args.decoupled_iter, "start": "the PNLSS model above"}
+                     "max_iter": args.decoupled_iter, "start": "the PNLSS model above", "weighting": args.weighting}
         decoupled = DecoupledPNLSSRegressor(n, n_branches=3, degree=3, n_init=args.n_init,
-                                            max_iter=args.decoupled_iter, period=8192, n_jobs=2, random_state=0)
+                                            max_iter=args.decoupled_iter, period=8192, n_jobs=2, random_state=0,
+                                            weighting=args.weighting)
         t0 = time.perf_counter()
         decoupled.fit(pnlss.transform(X), y)
         rows.append(entry(f"DecoupledPNLSSRegressor({n}, 3, 3) cpd", dsettings, decoupled, test,
@@ -365,7 +366,7 @@ def select_decoupled(args, X, y, test):
     pipe = Pipeline([("bla", BLAEstimator(n, period=8192, fs=400.0)),
                      ("model", DecoupledPNLSSRegressor(n, degree=3, init="random", n_init=args.n_init,
                                                        max_iter=args.decoupled_iter, period=8192, n_jobs=2,
-                                                       random_state=0))])
+                                                       weighting=args.weighting, random_state=0))])
     grid = {"model__n_branches": list(SELECT_BRANCHES), "model__n_knots": list(SELECT_KNOTS)}
     interior = [i for i, lv in enumerate(TRAIN_LEVELS) if min(TRAIN_LEVELS) < lv < max(TRAIN_LEVELS)]
     cv = [([i for i in range(len(TRAIN_LEVELS)) if i != h], [h]) for h in interior]
@@ -386,7 +387,7 @@ def select_decoupled(args, X, y, test):
     r, knots = best["model__n_branches"], best["model__n_knots"]
     name = f"DecoupledPNLSSRegressor({n}, {r}, 3" + (f", {knots} knots" if knots else "") + ") selected by CV"
     settings = {"n_states": n, "n_branches": r, "degree": 3, "n_knots": knots, "init": "random",
-                "n_init": args.n_init, "max_iter": args.decoupled_iter,
+                "n_init": args.n_init, "max_iter": args.decoupled_iter, "weighting": args.weighting,
                 "selected_by": "held-out interior estimation levels"}
     rows = []  # the choice refitted on all four levels; other seeds: how far the figure holds
     for seed in (0, *args.select_draws):
@@ -412,6 +413,9 @@ def main(argv=None):
                              "(random_state=S), recorded under draws")
     parser.add_argument("--decoupled-iter", type=int, default=50)
     parser.add_argument("--n-init", type=int, default=2)
+    parser.add_argument("--weighting", choices=["relative", "none"], default="relative",
+                        help="of the nonlinear fits' simulation error: each level's relative to its own output "
+                             "power, as NRMSE scores the levels (default), or none (the largest level dominates)")
     parser.add_argument("--cpd", action="store_true", help="also the decoupled model started from the PNLSS one")
     parser.add_argument("--no-pnlss", action="store_true", help="skip the full PNLSS model (and --cpd)")
     parser.add_argument("--select", action="store_true",
@@ -425,6 +429,7 @@ def main(argv=None):
                              "(AboveBandRegressor: the force's content there gated by the model's state)")
     parser.add_argument("--output", default=RESULTS / "f16.json")
     args = parser.parse_args(argv)
+    args.weighting = None if args.weighting == "none" else args.weighting
 
     from sklearn_pnlss import BLAEstimator, DecoupledPNLSSRegressor
 
@@ -453,9 +458,10 @@ def main(argv=None):
         r, d, *states = (int(v) for v in spec.split(":"))
         ns, seed = (states[0] if states else n), int(seed or 0)
         dsettings = {"n_states": ns, "n_branches": r, "degree": d, "init": "random", "n_init": args.n_init,
-                     "max_iter": args.decoupled_iter, "random_state": seed}
+                     "max_iter": args.decoupled_iter, "weighting": args.weighting, "random_state": seed}
         decoupled = DecoupledPNLSSRegressor(ns, n_branches=r, degree=d, init="random", n_init=args.n_init,
-                                            max_iter=args.decoupled_iter, period=8192, n_jobs=2, random_state=seed)
+                                            max_iter=args.decoupled_iter, period=8192, n_jobs=2,
+                                            weighting=args.weighting, random_state=seed)
         if ns not in linear:
             t0 = time.perf_counter()
             linear[ns] = BLAEstimator(ns, period=8192, fs=400.0).fit(X, y), time.perf_counter() - t0
