@@ -20,6 +20,10 @@ and predicted from the other three, the way the test levels lie between
 fitted ones (``GridSearchCV``, the benchmark's NRMSE); the choice is then
 refitted on all four levels (``selection`` in the results).
 
+The nonlinear fits weigh each level's error relative to its own output
+power (``weighting="relative"``), as the NRMSE scores the levels;
+``--weighting none`` fits the plain sum, which the largest level decides.
+
 The decoupled models (``--decoupled branches:degree[:states]``) start
 from the linear model of their state count (``init="random"``, no full
 polynomial; the BLA's time is counted in their fit); ``@S`` refits one

@@ -101,12 +101,14 @@ if train is not None:
 # needs none of it: ``init="random"`` starts from the linear model with
 # random branch directions over its states and input and ``W = 0``, and
 # Levenberg-Marquardt grows three quintic branches (78 nonlinear
-# coefficients). Two starts, fifty iterations each, the better kept by
-# training cost: no test level is used for fitting or selection.
+# coefficients). Each level's error counts relative to its own output power
+# (``weighting="relative"``), as the NRMSE scores the levels. Two starts,
+# fifty iterations each, the better kept by training cost: no test level is
+# used for fitting or selection.
 if train is not None:
     start = time.perf_counter()
     decoupled = DecoupledPNLSSRegressor(10, n_branches=3, degree=5, period=P, init="random", n_init=2,
-                                        max_iter=50, n_jobs=2, random_state=0)
+                                        max_iter=50, weighting="relative", n_jobs=2, random_state=0)
     decoupled.fit(bla.transform(X), y)
     show("decoupled, 3 x degree 5", nrmse(decoupled), time.perf_counter() - start, decoupled.n_nonlinear_params_)
 
@@ -233,10 +235,10 @@ if train is not None:
 #   3 and 5 in turn (``benchmarks/bench_f16.py --select``).
 # - **Large full models.** A Levenberg-Marquardt iteration of the full
 #   PNLSS model (2,893 parameters, 98,304 residuals) takes about 6 s on two
-#   cores, most of it J^T J, which runs at the machine's BLAS rate: exact
-#   Gauss-Newton steps on a model of that size cannot be much cheaper.
+#   cores of one machine and more than twice as long on another, most of it
+#   J^T J, which runs at the machine's BLAS rate: exact Gauss-Newton steps
+#   on a model of that size cannot be much cheaper.
 # - **Several outputs.** The three accelerations share one cost, each in
-#   units of its rms; weighting each by its noise (``weighting="noise"``) or
-#   each level by its size is measured in ``benchmarks/bench_f16.py``, not
-#   here.
+#   units of its rms (and each level relative to its own power); weighting
+#   each by its noise (``weighting="noise"``) is not measured here.
 plt.show()

@@ -76,6 +76,9 @@ def test_time_weights_scale_the_squared_error():
     w = np.linspace(0, 1, 12).reshape(6, 2)
     out = weigh(Segment(None, None, 0, time_weight=w), R)
     np.testing.assert_allclose(out[:, 0] ** 2, (w * R[:, :, 0] ** 2).ravel())
+    # A single-precision Jacobian stays single (its Gram matrix runs at the
+    # single-precision rate).
+    assert weigh(Segment(None, None, 0, time_weight=w), R.astype(np.float32)).dtype == np.float32
 
 
 def test_period_averaging_keeps_the_optimum():

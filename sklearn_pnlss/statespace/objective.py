@@ -80,7 +80,10 @@ def weigh(seg, R, start=0):
     ``T`` are whole periods."""
     T, p, k = R.shape
     if seg.time_weight is not None:
-        return (np.sqrt(seg.time_weight[start : start + T])[:, :, None] * R).reshape(-1, k)
+        # in R's precision: double weights would promote a single-precision
+        # Jacobian to double, doubling its Gram matrix's time and memory
+        w = np.sqrt(seg.time_weight[start : start + T]).astype(R.dtype, copy=False)
+        return (w[:, :, None] * R).reshape(-1, k)
     if seg.freq_weight is None:
         return R.reshape(-1, k)
     N = seg.period
