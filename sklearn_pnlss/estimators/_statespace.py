@@ -10,7 +10,7 @@ from numbers import Integral, Real
 import numpy as np
 from sklearn.utils.validation import check_is_fitted
 
-from ..statespace.fitting import FitSettings, relative_weights, simulation_objectives
+from ..statespace.fitting import TIME_DOMAIN_WEIGHTINGS, FitSettings, relative_weights, simulation_objectives
 from ..statespace.model_base import DivergenceError
 from ..statespace.scaled import normalised_linear_start
 from ..utils.handover import detach_stage
@@ -129,7 +129,7 @@ class StateSpaceRegressorBase(SignalRegressorBase):
     def _check_time_weight(self, time_weight, y_list):
         if time_weight is None:
             return None
-        if self.weighting not in (None, "relative"):
+        if self.weighting not in TIME_DOMAIN_WEIGHTINGS:
             raise ValueError(
                 f"time_weight is a time-domain weighting, but weighting={self.weighting!r} "
                 "weights in frequency; pass one of them (or weighting='relative')."

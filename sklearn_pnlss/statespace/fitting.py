@@ -29,10 +29,13 @@ from .objective import SimulationError
 from .segments import make_segments, transient_length
 
 __all__ = [
-    "AMPLIFIED_VALIDATION", "FitSettings", "LMFit", "iteration_listener", "optimise", "relative_weights",
-    "simulation_objectives",
-    "trusted_model",
+    "AMPLIFIED_VALIDATION", "FitSettings", "LMFit", "TIME_DOMAIN_WEIGHTINGS", "iteration_listener", "optimise",
+    "relative_weights", "simulation_objectives", "trusted_model",
 ]
+
+# The weightings that act in time (per sample, beside ``time_weight``); the
+# others weight the DFT bins of a period.
+TIME_DOMAIN_WEIGHTINGS = (None, "relative")
 
 # An iterate (or a start) that runs away (diverges, or leaves its trusted
 # range by more than its width) on the validation inputs amplified by this
@@ -155,7 +158,8 @@ def relative_weights(y_list, time_weights=None):
     cost is the largest level's, and a model may fit the quiet ones badly
     (on the F-16's levels 1, 3, 5 and 7, level 7 carries 21 to 37 times
     level 1's power, by output). The weights are scaled by the mean power over
-    the signals: with one signal (or signals of one level) nothing changes.
+    the signals: with one signal (or signals of one level) nothing changes,
+    and without ``time_weights`` None is returned (no weights at all).
     """
     power = np.array([np.var(Y, axis=0) for Y in y_list])  # (n_signals, n_outputs)
     silent = np.argwhere(power <= 0)
@@ -166,6 +170,8 @@ def relative_weights(y_list, time_weights=None):
             f"training signal {i} is constant; drop that signal or use weighting=None."
         )
     scale = power.mean(axis=0) / power
+    if time_weights is None and np.all(scale == 1.0):
+        return None  # one level: unit weights would only cost a multiply per Jacobian block
     if time_weights is None:
         return [np.broadcast_to(s, Y.shape) for s, Y in zip(scale, y_list)]
     return [w * s for w, s in zip(time_weights, scale)]
@@ -175,7 +181,7 @@ def frequency_weight(Xn, yn, settings):
     """Callable giving the weight per DFT bin of a periodic segment that
     averages ``n_averaged`` periods, or None (time domain)."""
     weighting, period, band = settings.weighting, settings.period, settings.band
-    if weighting in (None, "relative"):  # time-domain weightings
+    if weighting in TIME_DOMAIN_WEIGHTINGS:
         return None
     if period is None or not all(is_periodic(U.shape[0], period) for U in Xn):
         raise ValueError(
