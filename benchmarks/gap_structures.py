@@ -7,7 +7,7 @@ nonlinear element at one of its joints (between two masses, or a mass and
 the ground); a shaker force at a mass; accelerometers at the joint's points
 and the driving point, and one more where that makes fewer than two or
 three (a ground vibration test always senses the driving point); a
-periodic multisine (1-80 Hz, 200 Hz, three periods) at three training and
+periodic multisine (1-80 Hz, 200 Hz, three periods, or ``--periods``) at three training and
 two validation levels, integrated at 20 times the data rate, with white
 noise of 1 % of each channel's rms.  The
 element's strength is drawn so that the nominal misses the top level by
@@ -34,6 +34,7 @@ Writes ``results/gap_withheld_family_s.json``.
 
     python benchmarks/gap_structures.py --seeds 4
     python benchmarks/gap_structures.py --quick
+    python benchmarks/gap_structures.py --periods 1 --seeds 2
 """
 import argparse
 import json
@@ -114,7 +115,7 @@ def multisine(rng, rms):
     return u * rms / u.std()
 
 
-def records(structure, drive, sensors, levels, rng, force_rms):
+def records(structure, drive, sensors, levels, rng, force_rms, n_periods=N_PERIODS):
     X, Y = [], []
     for level in levels:
         u = multisine(rng, level * force_rms)
@@ -122,13 +123,13 @@ def records(structure, drive, sensors, levels, rng, force_rms):
             warnings.simplefilter("ignore")
             a = structure.simulate(u, fs=FS, inputs=[drive], sensors=sensors, periodic=True,
                                    oversampling=OVERSAMPLING, decimation=(4, 5))
-        a = np.tile(a, (N_PERIODS, 1))
-        X.append(np.tile(u, N_PERIODS)[:, None])
+        a = np.tile(a, (n_periods, 1))
+        X.append(np.tile(u, n_periods)[:, None])
         Y.append(a + NOISE * a.std(0) * rng.standard_normal(a.shape))
     return X, Y
 
 
-def make_case(effect, nominal_kind, seed):
+def make_case(effect, nominal_kind, seed, n_periods=N_PERIODS):
     rng = np.random.default_rng(seed)
     points, M, C, K, joints, masses, springs = draw_structure(rng)
     linear = Structure(M, C, K, points=points)
@@ -154,8 +155,8 @@ def make_case(effect, nominal_kind, seed):
     if effect is not None:
         truth = linear.with_connections([Connection(element(effect, (k_joint, rel.std(), vel.std()), rng),
                                                     *joint)])
-    X, Y = records(truth, drive, sensors, TRAIN_LEVELS, rng, force_rms)
-    X_val, Y_val = records(truth, drive, sensors, VALIDATION_LEVELS, rng, force_rms)
+    X, Y = records(truth, drive, sensors, TRAIN_LEVELS, rng, force_rms, n_periods)
+    X_val, Y_val = records(truth, drive, sensors, VALIDATION_LEVELS, rng, force_rms, n_periods)
     if nominal_kind == "exact":
         nominal = linear
     elif nominal_kind == "off":
@@ -168,8 +169,8 @@ def make_case(effect, nominal_kind, seed):
                 X_val=X_val, Y_val=Y_val, n_dof=len(points))
 
 
-def run_case(effect, nominal_kind, seed):
-    case = make_case(effect, nominal_kind, seed)
+def run_case(effect, nominal_kind, seed, n_periods=N_PERIODS):
+    case = make_case(effect, nominal_kind, seed, n_periods)
     row = dict(true=effect, nominal=nominal_kind, seed=seed, joint=case["joint"], n_dof=case["n_dof"],
                sensors=[p for p, _ in case["sensors"]], drive=case["drive"], commit=COMMIT)
     start = time.perf_counter()
@@ -220,20 +221,24 @@ def main(argv=None):
     parser.add_argument("--quick", action="store_true", help="one seed, the exact nominal")
     parser.add_argument("--nominals", nargs="*", default=list(NOMINALS), choices=NOMINALS)
     parser.add_argument("--only", nargs="*", default=None, help="true effects to run (names, 'null')")
+    parser.add_argument("--periods", type=int, default=N_PERIODS,
+                        help="steady-state periods per record (1: the noise read at the lines the input leaves "
+                             "free; results to gap_withheld_family_s_1_period.json)")
     parser.add_argument("--update", action="store_true",
                         help="replace these cases in the results file, keep the others")
     args = parser.parse_args(argv)
     seeds = [args.first_seed] if args.quick else list(range(args.first_seed, args.first_seed + args.seeds))
     nominals = ["exact"] if args.quick else args.nominals
     rows = []
-    path = RESULTS / ("gap_withheld_family_s" + ("_quick" if args.quick else "") + ".json")
+    name = "gap_withheld_family_s" + ("" if args.periods == N_PERIODS else f"_{args.periods}_period")
+    path = RESULTS / (name + ("_quick" if args.quick else "") + ".json")
     kept = json.loads(path.read_text())["rows"] if args.update and path.exists() else []
     for nominal_kind in nominals:
         for effect in EFFECTS:
             if args.only and (effect or "null") not in args.only:
                 continue
             for seed in seeds:
-                row = run_case(effect, nominal_kind, 1000 * EFFECTS.index(effect) + seed)
+                row = run_case(effect, nominal_kind, 1000 * EFFECTS.index(effect) + seed, args.periods)
                 rows.append(row)
                 kept = [r for r in kept if (r["true"], r["nominal"], r["seed"]) != (effect, nominal_kind, row["seed"])]
                 if "ok" not in row:

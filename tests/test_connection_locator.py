@@ -11,6 +11,7 @@ import pytest
 
 from sklearn_pnlss.datasets import load_f16
 from sklearn_pnlss.gap import ConnectionLocator, modal_nominal
+from sklearn_pnlss.gap.connections.spectra import PeriodSpectra
 from sklearn_pnlss.physics import BoucWen, Connection, CoulombFriction, CubicStiffness, DeadZoneSpring, Structure
 
 POINTS = ["base", "middle", "tip"]
@@ -126,13 +127,32 @@ def test_a_linear_structure_leaves_only_noise_to_explain():
     assert len(loops) == 12 and all(c.parameters["alpha"] >= 0 for c in loops)
 
 
+@pytest.mark.parametrize("element, low, high", [(None, -1.0, 1.0), (DeadZoneSpring(3e4, 1e-3), -1.0, 10.0)])
+def test_the_noise_of_one_period_is_read_at_the_lines_the_input_leaves_free(element, low, high):
+    """One steady-state period per record (the chain's multisine excites
+    every fourth line): the noise read at the free lines is the spread of
+    three periods' to within 1 dB on a linear chain, and an upper bound
+    (within 10 dB) with a backlash, whose content lies on those lines too."""
+    X, Y = _records(element, (20.0, 40.0, 60.0))
+    three = PeriodSpectra.from_signals(X, Y, period=PERIOD, fs=FS)
+    one = PeriodSpectra.from_signals([x[:PERIOD] for x in X], [y[:PERIOD] for y in Y], period=PERIOD, fs=FS)
+    assert np.all(three.n_periods == 3) and np.all(one.n_periods == 1)
+    band = (three.freqs >= 1.0) & (three.freqs <= 83.0)
+    ratio_db = 10 * np.log10(one.Y_noise[:, band].mean(axis=1) / (3 * three.Y_noise[:, band].mean(axis=1)))
+    assert np.all(ratio_db > low) and np.all(ratio_db < high)
+
+
 def test_bad_input_is_named():
     X, Y = _records(None, (20.0,))
     with pytest.raises(ValueError, match="which no sensor measures"):
         ConnectionLocator(Structure(M, C, K, points=POINTS), fs=FS, period=PERIOD, inputs=["base"],
                           sensors=SENSORS[:2], places=[("base", "tip")]).fit(X, [y[:, :2] for y in Y])
-    with pytest.raises(ValueError, match="at least 2 are needed"):
-        _locator().fit([x[:PERIOD] for x in X], [y[:PERIOD] for y in Y])
+    full = np.fft.irfft(np.exp(2j * np.pi * np.random.default_rng(0).random(PERIOD // 2 + 1)), PERIOD)[:, None]
+    with pytest.raises(ValueError, match="one period whose input excites nearly every line"):
+        _locator().fit([full], [y[:PERIOD] for y in Y[:1]])
+    with pytest.raises(ValueError, match="holds no steady-state period after transient_periods=1"):
+        ConnectionLocator(Structure(M, C, K, points=POINTS), fs=FS, period=PERIOD, inputs=["base"], sensors=SENSORS,
+                          transient_periods=1).fit([x[:PERIOD] for x in X], [y[:PERIOD] for y in Y])
     with pytest.raises(ValueError, match="one \\(point, kind\\) per column"):
         _locator().fit(X, [y[:, :2] for y in Y])
     with pytest.raises(ValueError, match="not a whole number of periods"):

@@ -36,6 +36,29 @@ def test_a_withheld_backlash_is_named_with_its_place_and_closes_the_gap():
     assert "backlash between middle and tip" in str(report)
 
 
+def test_records_of_one_period_each_name_the_backlash_too():
+    """No period repeated (one steady-state period per level, the noise read
+    at the lines the multisine leaves free): the backlash is named at its
+    place against a cubic spring, closes 95 % of the nominal's squared
+    error on two new levels, its rate within 10 % and its clearance within
+    20 %; what it leaves stands under 20 dB over what it leaves at the free
+    lines (the report's noise for such records: the fitted clearance's
+    error shows at the excited lines); the content above the band, which
+    nothing tells from the noise here, places nothing."""
+    element = DeadZoneSpring(3e4, 1e-3)
+    one = lambda records: [signal[:PERIOD] for signal in records]  # noqa: E731
+    X, Y = _records(element, (20.0, 40.0, 60.0))
+    gap = _diagnosis(n_places=1, laws=["cubic_stiffness", "backlash"]).fit(one(X), one(Y))
+    assert gap.entry_.place is None
+    X_val, Y_val = _records(element, (30.0, 50.0), seed=1)
+    report = gap.report(one(X_val), one(Y_val))
+    assert report.effect_found and set(report.place) == {"middle", "tip"} and report.law == "backlash"
+    assert np.all(report.closure > 0.95)
+    assert abs(report.parameters["kb"] / 3e4 - 1) < 0.1
+    assert abs(report.parameters["gap"] / 1e-3 - 1) < 0.2
+    assert np.all(report.left_over_noise_db > 0) and np.all(report.left_over_noise_db < 20)
+
+
 def test_a_joint_that_sticks_and_slips_is_named_a_hysteresis():
     """A Jenkins-like joint between the middle mass and the tip (stuck
     stiffness 2e4 N/m, slipping at 20 N): the diagnosis names a hysteresis

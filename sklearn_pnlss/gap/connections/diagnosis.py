@@ -29,6 +29,7 @@ from .entry import read_entry
 from .locator import ConnectionLocator, band_and_weights
 from .recalibrate import recalibrated
 from .refine import BandError, fit_connection
+from .spectra import free_lines
 from .update import ElementUpdate, linear_corrections, updated_elements
 
 __all__ = ["StructuralGapDiagnosis", "StructuralGapReport"]
@@ -178,7 +179,8 @@ class StructuralGapDiagnosis(BaseEstimator):
     fs : float
         Sampling rate, Hz.
     period : int
-        Samples per period of the records (each two periods or more).
+        Samples per period of the records (one steady-state period or more
+        each; of one, the noise is read at the lines the input leaves free).
     inputs : sequence of str
         Points of the input forces, one per column of ``X``.
     sensors : sequence of (str, str)
@@ -486,8 +488,8 @@ class StructuralGapDiagnosis(BaseEstimator):
         nominal, recalibrated, connection, linear = (_simulated(error, s) for s in (
             self.reference_, self.nominal_, self.best_.structure, self.linear_[self.best_.place].structure))
         e0, e1 = error.relative(nominal), error.relative(connection)
-        noise = np.sum(error.spectra.Y_noise[:, error.lines] * error.weights**2, axis=(1, 2))
         left = np.sum(np.abs(connection - error.measured) ** 2, axis=(1, 2))
+        noise = _noise_power(error, connection)
         return StructuralGapReport(
             effect_found=self.effect_found_, place=self.best_.place, law=self.best_.law.name,
             parameters=dict(self.best_.parameters), nominal_error=e0,
@@ -505,6 +507,21 @@ def _simulated(error, structure):
         return error.simulate(structure)
     except (FloatingPointError, ValueError, np.linalg.LinAlgError):
         return np.full(error.measured.shape, np.inf + 0j)
+
+
+def _noise_power(error, simulated):
+    """Each record's weighted noise power summed over the band's lines: from
+    the spread of its periods, or for a record of one period from what
+    ``simulated`` leaves at the band's lines the input leaves free (the
+    measured output there holds the nonlinearity's content as well; a
+    model that captures it leaves the noise alone, an upper bound)."""
+    noise = np.sum(error.spectra.Y_noise[:, error.lines] * error.weights**2, axis=(1, 2))
+    for i in np.flatnonzero(error.spectra.n_periods == 1):
+        free = free_lines(error.spectra.U[i])[error.lines]
+        if free.any():
+            noise[i] = error.lines.size * np.sum(np.mean(np.abs(simulated[i, free] - error.measured[i, free]) ** 2,
+                                                         axis=0))
+    return noise
 
 
 def _per_output(simulated, measured):

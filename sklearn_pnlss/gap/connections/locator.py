@@ -182,7 +182,9 @@ class ConnectionLocator(BaseEstimator):
         Sampling rate, Hz.
     period : int
         Samples per period: every record is a whole number of steady-state
-        periods (two or more).
+        periods (their spread is the noise; a record of one period has its
+        noise read at the lines the input leaves free, see
+        :mod:`~sklearn_pnlss.gap.connections.spectra`).
     inputs : sequence of str
         The points the input forces act on, one per column of ``X``.
     sensors : sequence of (str, str)

@@ -39,7 +39,8 @@ from ...utils.validation import is_periodic
 from ..settings import SETTINGS
 
 __all__ = ["NoiseFloor", "drift_free_variance", "estimate_noise", "unsettled_signals", "repeated_input_noise",
-           "non_excited_noise", "residual_noise", "gap_test"]
+           "non_excited_noise", "residual_noise", "gap_test", "banded_spectrum",
+           "free_of_input"]
 
 #: Frequency bands over which a noise level read at scattered DFT lines is
 #: averaged (then interpolated, in dB, over the lines it was not read at).
@@ -178,7 +179,15 @@ def estimate_noise(y_list, period):
         f"({'/'.join(map(str, sorted(set(multi))))} periods)"))
 
 
-def _banded(records, fs, n_grid):
+def free_of_input(power):
+    """The bins of an input's power spectrum ``SETTINGS.non_excited_db``
+    below its strongest one (DC never counts): free of input."""
+    free = power < power[1:].max() * 10 ** (SETTINGS.non_excited_db / 10)
+    free[0] = False
+    return free
+
+
+def banded_spectrum(records, fs, n_grid):
     """Noise spectrum on the unitary DFT grid of ``n_grid`` samples from
     powers read at scattered lines of records of any length.
 
@@ -281,7 +290,7 @@ def repeated_input_noise(u_list, y_list, period, fs):
     if not records:
         return None
     n_grid = _grid(u_list, period)
-    spectrum, n_lines = _banded(records, fs, n_grid)
+    spectrum, n_lines = banded_spectrum(records, fs, n_grid)
     if spectrum is None:
         return None
     return _from_spectrum(spectrum, n_grid, source="repeated_inputs", detail=(
@@ -350,15 +359,10 @@ def _free_lines(data, u_list, period, fs, segment, n_grid):
     reads = []
     for (u, _, _), u_full in zip(data, u_list):
         slices, w = _segments(u.size, is_periodic(u_full.size, period), segment)
-        masks = []
-        for sl in slices:
-            p = _power(u[sl], w)
-            usable = p < p[1:].max() * 10 ** (SETTINGS.non_excited_db / 10)
-            usable[0] = False
-            masks.append(usable)
+        masks = [free_of_input(_power(u[sl], w)) for sl in slices]
         reads.append((slices, w, masks))
     lines = [(np.zeros(m.size), m, sl.stop - sl.start) for slices, _, masks in reads for sl, m in zip(slices, masks)]
-    return None if _banded(lines, fs, n_grid)[0] is None else reads
+    return None if banded_spectrum(lines, fs, n_grid)[0] is None else reads
 
 
 def _best_residual(data, simulations, u_list, period, fs, reads, n_grid):
@@ -375,7 +379,7 @@ def _best_residual(data, simulations, u_list, period, fs, reads, n_grid):
             records.extend((_power(r[sl], w), usable, sl.stop - sl.start) for sl, usable in zip(slices, masks))
         if not np.all([np.all(np.isfinite(p)) for p, _, _ in records]):
             continue
-        spectrum, n_lines = _banded(records, fs, n_grid)
+        spectrum, n_lines = banded_spectrum(records, fs, n_grid)
         level = sum(p[m].sum() for p, m, _ in records) / max(sum(m.sum() for _, m, _ in records), 1)
         if best is None or level < best[0]:
             best = (level, name, spectrum, n_lines)
