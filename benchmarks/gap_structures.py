@@ -7,9 +7,11 @@ nonlinear element at one of its joints (between two masses, or a mass and
 the ground); a shaker force at a mass; accelerometers at the joint's points
 and the driving point, and one more where that makes fewer than two or
 three (a ground vibration test always senses the driving point); a
-periodic multisine (1-80 Hz, 200 Hz, three periods, or ``--periods``) at three training and
-two validation levels, integrated at 20 times the data rate, with white
-noise of 1 % of each channel's rms.  The
+periodic multisine (1-80 Hz on every other line, 200 Hz, three periods) at
+three training and two validation levels, integrated at 20 times the data
+rate, with white noise of 1 % of each channel's rms.  With ``--periods 1``
+each record is one steady-state period, its noise read at the lines the
+multisine leaves free.  The
 element's strength is drawn so that the nominal misses the top level by
 -20 to -8 dB of the output.
 
@@ -30,11 +32,12 @@ recorded on its own as well.
 
 Target (issue 38): the right law at the right place in at least 90 % of
 the cases, no false alarm, median under 60 s per diagnosis on 2 cores.
-Writes ``results/gap_withheld_family_s.json``.
+Writes ``results/gap_withheld_family_s.json`` (``--periods 1``:
+``results/gap_withheld_family_s_1_period.json``).
 
     python benchmarks/gap_structures.py --seeds 4
     python benchmarks/gap_structures.py --quick
-    python benchmarks/gap_structures.py --periods 1 --seeds 2
+    python benchmarks/gap_structures.py --periods 1 --seeds 1
 """
 import argparse
 import json
