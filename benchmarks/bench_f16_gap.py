@@ -19,6 +19,7 @@ free-participation reading).
 import argparse
 import sys
 import time
+from itertools import combinations
 from pathlib import Path
 
 import numpy as np
@@ -61,7 +62,7 @@ def main(argv=None):
     parser.add_argument("--data", default=str(REPO.parent / "shared" / "data" / "f16"))
     parser.add_argument("--no-ground", action="store_true", help="places between sensed points only")
     args = parser.parse_args(argv)
-    places = [(a, b) for i, a in enumerate(POINTS) for b in POINTS[i + 1:]] if args.no_ground else None
+    places = list(combinations(POINTS, 2)) if args.no_ground else None
     data = {level: load_f16(args.data, level=level, validation_level=None) for level in TRAIN + TEST}
     start = time.perf_counter()
     nominal = modal_nominal(data[1].X, data[1].y, fs=400.0, points=POINTS, driving_point="drive", period=8192,

@@ -372,18 +372,12 @@ def _f16_step():
     return _f16_iteration("step solver setup") + _f16_iteration("step solves")
 
 
-def _f16_floor(level=None):
-    """The test outputs' power above the excited band as an NRMSE: the
-    mean, or one level's per output."""
-    floor = _results("f16")["out_of_band_floor"]
-    return [floor["mean"]] if level is None else floor["nrmse"][str(level)]
-
-
-def _f16_non_periodic(level=None):
-    """The test records' change from period to period as an NRMSE (the
-    BLA and PNLSS rerun, f16_pnlss.json): the mean, or one level's per
+def _f16_floor(level=None, key="out_of_band_floor", name="f16"):
+    """A floor of bench_f16.py as an NRMSE (``key``: the test outputs' power
+    above the excited band, or ``non_periodic_floor``, their change from
+    period to period, in results ``name``): the mean, or one level's per
     output."""
-    floor = _results("f16_pnlss")["non_periodic_floor"]
+    floor = _results(name)[key]
     return [floor["mean"]] if level is None else floor["nrmse"][str(level)]
 
 
@@ -600,6 +594,13 @@ def _family_s(nominal=None, without=(), name="gap_withheld_family_s"):
     rows = [r for r in _results(name)["rows"] if "ok" in r and r["true"] is not None
             and r["true"] not in without and (nominal is None or r["nominal"] == nominal)]
     return sum(r["ok"] for r in rows), len(rows)
+
+
+def _family_s_one_period():
+    """The one-period run of family s: [right, effect cases, null cases,
+    median seconds]."""
+    name = "gap_withheld_family_s_1_period"
+    return [*_family_s(name=name), _results(name)["summary"]["null_cases"], _family_s_median(None, name)]
 
 
 def _family_s_median(nominal, name="gap_withheld_family_s"):
@@ -855,14 +856,10 @@ FIGURES = [
               "(the target: under 60 s)", FAM_S, lambda: [_family_s_median("modal"), 2, 60]),
     Figure(R, "With records of one period each (`gap_structures.py --periods 1`", FAM_S1, lambda: [1]),
     Figure(GAP, "one draw of every case: 15 of 15 right, no false alarm in 3 cases, 64 s at the median", FAM_S1,
-           lambda: [*_family_s(name="gap_withheld_family_s_1_period"),
-                    _results("gap_withheld_family_s_1_period")["summary"]["null_cases"],
-                    _family_s_median(None, "gap_withheld_family_s_1_period")]),
+           _family_s_one_period),
     Figure(R, "one draw of every case: 15 of 15, no false alarm in 3 cases without an element, 64 s at the "
               "median, over the 60 s target", FAM_S1,
-           lambda: [*_family_s(name="gap_withheld_family_s_1_period"),
-                    _results("gap_withheld_family_s_1_period")["summary"]["null_cases"],
-                    _family_s_median(None, "gap_withheld_family_s_1_period"), 60]),
+           lambda: [*_family_s_one_period(), 60]),
     Figure(R, "233 s) it finds a joint", F16_GAP, lambda: [_f16_gap("seconds")]),
     Figure(R, "the best, a backlash, leaves 0.63 / 0.49 / 0.18 / 0.18 of the training levels' output, where the "
               "hysteresis at the payload alone leaves 0.28 / 0.23 / 0.14 / 0.13", "bench_f16_gap.py --no-ground: "
@@ -1012,7 +1009,8 @@ FIGURES = [
     Figure(R, "(0.204 / 0.106 / 0.334 on level 6)", F16, lambda: [*_f16_floor(6), 6]),
     Figure(R, "0.13 needs a model of those modes", F16, lambda: [0.13]),
     Figure(R, "an NRMSE of 0.050 in the mean and 0.071 / 0.044 / 0.122 on level 6", "bench_f16.py --decoupled: "
-              "f16_pnlss.json", lambda: [*_f16_non_periodic(), *_f16_non_periodic(6), 6]),
+              "f16_pnlss.json", lambda: [*_f16_floor(key="non_periodic_floor", name="f16_pnlss"),
+                                        *_f16_floor(6, "non_periodic_floor", "f16_pnlss"), 6]),
     Figure(R, "a causal FIR of 300 taps fitted on the training levels' residual) brings level 6 to 0.123 / 0.111 / "
               "0.244, beside the deep LRU's 0.134 / 0.099 / 0.237, but the payload's level 2 from 0.152 to 0.234",
            F16, lambda: [_f16_force("taps"), 6, *_f16_force("nrmse_with_map")["6"], *_f16_lru_level_6(), 2,
