@@ -82,37 +82,61 @@ class BandError:
 
         The structure is simulated prewarped (see
         :mod:`~sklearn_pnlss.physics.prewarp`): the continuous structure's
-        response, not Newmark's at a few steps per sample."""
-        fs_fine, decimation = self.spectra.fs * self.oversampling, prime_factors(self.oversampling)
-        warped = prewarped(structure, fs_fine)
+        response, not Newmark's at a few steps per sample.  Each record's
+        search starts from the last one's steady state, and ends where the
+        next one's will start."""
+        (out, starts), = self._simulated([structure])
+        if out is None:
+            raise FloatingPointError("the simulation diverged.")
+        self._starts = starts
+        return out
 
-        def one(u_fine, start):
-            if start is not None and start.size != 3 * warped.n_dof + 2 * warped.n_internal_states:
+    def residuals_around(self, structures):
+        """:meth:`residuals` of structures near the last one simulated (a
+        Jacobian's steps), all run side by side from its steady states,
+        which stay the next search's starts."""
+        vectors = [self._residual_vector(out) for out, _ in self._simulated(structures)]
+        return [self.penalty() if e is None else e for e in vectors]
+
+    def _simulated(self, structures):
+        """``(spectra, final states)`` of each structure on every record, run
+        side by side in threads (all records of all structures at once: a
+        Jacobian's columns keep both cores busy where one structure's three
+        records left one idle a third of the time); ``(None, None)`` for
+        one that diverges."""
+        fs_fine, decimation = self.spectra.fs * self.oversampling, prime_factors(self.oversampling)
+        warped = [prewarped(structure, fs_fine) for structure in structures]
+
+        def one(k, u_fine, start):
+            if start is not None and start.size != 3 * warped[k].n_dof + 2 * warped[k].n_internal_states:
                 start = None
-            with warnings.catch_warnings():
-                # a trial point that does not settle is judged by its misfit
-                warnings.simplefilter("ignore")
-                sim = warped.simulate_fine(u_fine, fs=fs_fine, inputs=self.inputs, periodic=True,
-                                           initial_state=start, warn=False, max_periods=FIT_MAX_PERIODS,
-                                           max_abs=self._max_abs)
-            y = decimate_columns(warped.measure(sim, self.sensors), decimation, periodic=True)
+            try:
+                with warnings.catch_warnings():
+                    # a trial point that does not settle is judged by its misfit
+                    warnings.simplefilter("ignore")
+                    sim = warped[k].simulate_fine(u_fine, fs=fs_fine, inputs=self.inputs, periodic=True,
+                                                  initial_state=start, warn=False, max_periods=FIT_MAX_PERIODS,
+                                                  max_abs=self._max_abs)
+            except (FloatingPointError, ValueError, np.linalg.LinAlgError):
+                return None, None
+            y = decimate_columns(warped[k].measure(sim, self.sensors), decimation, periodic=True)
             return np.fft.rfft(y, axis=0)[self.lines] * self._out_factors, sim.final_state
 
-        self.n_simulations += 1
-        try:
-            results = each_in_threads(one, self.u_fine, self._starts)
-            out = np.array([r[0] for r in results])
-            if not np.all(np.isfinite(out)):
-                raise FloatingPointError("the simulation diverged.")
-        except (FloatingPointError, ValueError, np.linalg.LinAlgError):
-            if all(s is None for s in self._starts):
-                raise
-            # a start on another structure's orbit (a large one, of a trial
-            # point far off) can throw a stiff law off; from rest, once more
-            self.forget_starts()
-            return self.simulate(structure)
-        self._starts = [r[1] for r in results]
-        return out
+        def run(ks, starts):
+            rows = [(k, u, start) for k in ks for u, start in zip(self.u_fine, starts)]
+            done = each_in_threads(one, *zip(*rows))
+            n = len(self.u_fine)
+            return [done[i * n:(i + 1) * n] for i in range(len(ks))]
+
+        self.n_simulations += len(structures)
+        results = dict(zip(range(len(structures)), run(range(len(structures)), self._starts)))
+        # a start on another structure's orbit (a large one, of a trial
+        # point far off) can throw a stiff law off; from rest, once more
+        again = [k for k, records in results.items() if not _finite(records)]
+        if again and any(s is not None for s in self._starts):
+            results.update(zip(again, run(again, [None] * len(self.u_fine))))
+        return [(np.array([r[0] for r in records]), [r[1] for r in records]) if _finite(records) else (None, None)
+                for records in (results[k] for k in range(len(structures)))]
 
     def forget_starts(self):
         """The next simulation starts from rest (a new fit's structure is
@@ -121,22 +145,40 @@ class BandError:
 
     def residuals(self, structure):
         """Real and imaginary parts of the weighted error, flattened."""
-        size = np.sqrt(np.mean(np.abs(self.measured) ** 2))
         try:
-            e = (self.simulate(structure) - self.measured).reshape(-1)
-        except (FloatingPointError, ValueError, np.linalg.LinAlgError):
+            e = self._residual_vector(self.simulate(structure))
+        except FloatingPointError:
             e = None
-        if e is None or np.sqrt(np.mean(np.abs(e) ** 2)) > _PENALTY * size:  # running away
+        if e is None:
             # its orbit is no start for the next trial point (from there a
             # stiff law ran away at every step of a Jacobian)
             self.forget_starts()
-            return np.full(2 * self.measured.size, _PENALTY * size)
+            return self.penalty()
+        return e
+
+    def penalty(self):
+        """The residuals of a trial point that diverges or runs away: a
+        constant far above any real misfit."""
+        return np.full(2 * self.measured.size, _PENALTY * np.sqrt(np.mean(np.abs(self.measured) ** 2)))
+
+    def _residual_vector(self, simulated):
+        """The weighted error of simulated spectra, flattened; None for a
+        diverged (None) or running-away simulation."""
+        if simulated is None:
+            return None
+        e = (simulated - self.measured).reshape(-1)
+        if np.sqrt(np.mean(np.abs(e) ** 2)) > _PENALTY * np.sqrt(np.mean(np.abs(self.measured) ** 2)):
+            return None
         return np.concatenate([e.real, e.imag])
 
     def relative(self, simulated):
         """Each record's rms error over its rms output (weighted outputs)."""
         return np.sqrt(np.sum(np.abs(simulated - self.measured) ** 2, axis=(1, 2))
                        / np.sum(np.abs(self.measured) ** 2, axis=(1, 2)))
+
+
+def _finite(records):
+    return all(r[0] is not None and np.all(np.isfinite(r[0])) for r in records)
 
 
 @dataclass(frozen=True)
@@ -190,7 +232,8 @@ def fit_connection(nominal, candidate, error, *, scales, max_nfev=20, correction
         value is zero.
     max_nfev : int, default=20
         Evaluations of the least squares at most (each costs a simulation
-        of the training records, and one per parameter for its Jacobian).
+        of the training records, and one per parameter for its Jacobian,
+        those run side by side).
     correction : ModalCorrection, default=None
         Modal corrections of ``nominal`` (built around it) fitted with the
         connection: the locator's are first-order, and the law's linear
@@ -229,6 +272,19 @@ def fit_connection(nominal, candidate, error, *, scales, max_nfev=20, correction
             return np.full(2 * error.measured.size, _PENALTY)
         return error.residuals(structure) / size
 
+    def jacobian_steps(_, thetas):
+        # least_squares's map over a Jacobian's steps (``workers``): the
+        # steps simulated side by side, from the point's own steady states
+        thetas, structures = list(thetas), []
+        for theta in thetas:
+            try:
+                structures.append(structure_at(theta))
+            except ValueError:
+                structures.append(None)
+        simulated = iter(error.residuals_around([s for s in structures if s is not None]))
+        return [next(simulated) / size if s is not None else np.full(2 * error.measured.size, _PENALTY)
+                for s in structures]
+
     first = error.n_simulations
     error.forget_starts()
     # the locator's coefficients, and its nonlinear element alone: a large
@@ -240,7 +296,7 @@ def fit_connection(nominal, candidate, error, *, scales, max_nfev=20, correction
     costs = [np.sum(fun(t) ** 2) for t in starts]
     theta0 = starts[int(np.argmin(costs))]
     res = least_squares(fun, theta0, bounds=(lower, np.inf), method="trf", x_scale="jac", diff_step=1e-4,
-                        max_nfev=max_nfev, xtol=1e-6, ftol=1e-6)
+                        max_nfev=max_nfev, xtol=1e-6, ftol=1e-6, workers=jacobian_steps)
     theta = res.x if np.sum(res.fun**2) < min(costs) else theta0
     best, structure = parameters(theta[:len(names)]), structure_at(theta)
     try:
