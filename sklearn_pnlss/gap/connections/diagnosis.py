@@ -321,7 +321,7 @@ class StructuralGapDiagnosis(BaseEstimator):
         # BLAS on one thread throughout: the simulations run in threads of
         # their own, and the small solves between them (the optimiser's,
         # the shots') left BLAS's threads spinning against them (a friction
-        # case: 86 s of wall time and 147 s of CPU, 69 s and 115 s)
+        # case: 86 s of wall time and 147 s of CPU, 68 s and 112 s)
         with one_blas_thread():
             return self._fit(X, y)
 

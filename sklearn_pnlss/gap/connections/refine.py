@@ -83,8 +83,8 @@ class BandError:
         The structure is simulated prewarped (see
         :mod:`~sklearn_pnlss.physics.prewarp`): the continuous structure's
         response, not Newmark's at a few steps per sample.  Each record's
-        search starts from the last one's steady state, and ends where the
-        next one's will start."""
+        steady-state search starts from the last simulated one's, and its
+        own is the next search's start."""
         (out, starts), = self._simulated([structure])
         if out is None:
             raise FloatingPointError("the simulation diverged.")
@@ -129,14 +129,15 @@ class BandError:
             return [done[i * n:(i + 1) * n] for i in range(len(ks))]
 
         self.n_simulations += len(structures)
-        results = dict(zip(range(len(structures)), run(range(len(structures)), self._starts)))
+        results = run(range(len(structures)), self._starts)
         # a start on another structure's orbit (a large one, of a trial
         # point far off) can throw a stiff law off; from rest, once more
-        again = [k for k, records in results.items() if not _finite(records)]
+        again = [k for k, records in enumerate(results) if not _finite(records)]
         if again and any(s is not None for s in self._starts):
-            results.update(zip(again, run(again, [None] * len(self.u_fine))))
+            for k, records in zip(again, run(again, [None] * len(self.u_fine))):
+                results[k] = records
         return [(np.array([r[0] for r in records]), [r[1] for r in records]) if _finite(records) else (None, None)
-                for records in (results[k] for k in range(len(structures)))]
+                for records in results]
 
     def forget_starts(self):
         """The next simulation starts from rest (a new fit's structure is
