@@ -60,6 +60,7 @@ class BandError:
         self.u_fine = [np.stack([upsample_fft(np.fft.irfft(U[:, j], spectra.period), oversampling, periodic=True)
                                  for j in range(U.shape[1])], axis=1) for U in spectra.U]
         self.measured = spectra.Y[:, lines] * weights
+        self.size = float(np.sqrt(np.mean(np.abs(self.measured) ** 2)))  # the weighted records' rms
         # the integrator's rates made continuous, per line (see
         # physics.prewarp), with the outputs' weights
         fs_fine = spectra.fs * self.oversampling
@@ -85,7 +86,7 @@ class BandError:
         response, not Newmark's at a few steps per sample.  Each record's
         steady-state search starts from the last simulated one's, and its
         own is the next search's start."""
-        (out, starts), = self._simulated([structure])
+        (out, starts), = self._run_side_by_side([structure])
         if out is None:
             raise FloatingPointError("the simulation diverged.")
         self._starts = starts
@@ -95,10 +96,10 @@ class BandError:
         """:meth:`residuals` of structures near the last one simulated (a
         Jacobian's steps), all run side by side from its steady states,
         which stay the next search's starts."""
-        vectors = [self._residual_vector(out) for out, _ in self._simulated(structures)]
+        vectors = [self._residual_vector(out) for out, _ in self._run_side_by_side(structures)]
         return [self.penalty() if e is None else e for e in vectors]
 
-    def _simulated(self, structures):
+    def _run_side_by_side(self, structures):
         """``(spectra, final states)`` of each structure on every record, run
         side by side in threads (all records of all structures at once: a
         Jacobian's columns keep both cores busy where one structure's three
@@ -160,7 +161,7 @@ class BandError:
     def penalty(self):
         """The residuals of a trial point that diverges or runs away: a
         constant far above any real misfit."""
-        return np.full(2 * self.measured.size, _PENALTY * np.sqrt(np.mean(np.abs(self.measured) ** 2)))
+        return np.full(2 * self.measured.size, _PENALTY * self.size)
 
     def _residual_vector(self, simulated):
         """The weighted error of simulated spectra, flattened; None for a
@@ -168,7 +169,7 @@ class BandError:
         if simulated is None:
             return None
         e = (simulated - self.measured).reshape(-1)
-        if np.sqrt(np.mean(np.abs(e) ** 2)) > _PENALTY * np.sqrt(np.mean(np.abs(self.measured) ** 2)):
+        if np.sqrt(np.mean(np.abs(e) ** 2)) > _PENALTY * self.size:
             return None
         return np.concatenate([e.real, e.imag])
 
@@ -248,7 +249,8 @@ def fit_connection(nominal, candidate, error, *, scales, max_nfev=20, correction
     law, p0 = candidate.law, dict(candidate.parameters)
     names = law.free_names
     d_rms, v_rms = scales
-    size = float(np.sqrt(np.mean(np.abs(error.measured) ** 2)))
+    size = error.size
+    penalty = np.full(2 * error.measured.size, _PENALTY)  # error.penalty(), relative to size
     # each parameter on the scale of its locator value (a change of its own
     # size), or of the force it adds at the rms motion where that is zero
     typical = {"stiffness": 1.0 / d_rms, "damping": 1.0 / v_rms, "gap": d_rms}
@@ -270,7 +272,7 @@ def fit_connection(nominal, candidate, error, *, scales, max_nfev=20, correction
         try:
             structure = structure_at(theta)
         except ValueError:  # a correction that is not a structure's
-            return np.full(2 * error.measured.size, _PENALTY)
+            return penalty.copy()
         return error.residuals(structure) / size
 
     def jacobian_steps(_, thetas):
@@ -283,8 +285,7 @@ def fit_connection(nominal, candidate, error, *, scales, max_nfev=20, correction
             except ValueError:
                 structures.append(None)
         simulated = iter(error.residuals_around([s for s in structures if s is not None]))
-        return [next(simulated) / size if s is not None else np.full(2 * error.measured.size, _PENALTY)
-                for s in structures]
+        return [next(simulated) / size if s is not None else penalty.copy() for s in structures]
 
     first = error.n_simulations
     error.forget_starts()
