@@ -182,3 +182,43 @@ def test_single_precision_that_overflows_falls_back_to_double(monkeypatch):
     G, g = cost.normal_equations(model)
     np.testing.assert_array_equal(G, G64)
     np.testing.assert_array_equal(g, g64)
+
+
+def test_the_columns_of_the_recursion_can_be_shared_out():
+    """The sensitivity recursion run on spans of its columns (as threads
+    share it out) writes the Jacobian of the whole run: spans that cut
+    through the state's parameters, through the start-state columns, or at
+    their border; with states held at the edge of a trusted box, inputs in
+    the monomials, and the state after the run the same from every span."""
+    from sklearn_pnlss.statespace._pnlss_kernels import pnlss_jacobian
+
+    rng = np.random.default_rng(8)
+    model = _pnlss(rng, n=3, m=1, p=2, degrees=(2, 3))
+    model.bounds[:3] = [[-0.2, 0.2]] * 3  # the states leave it: held, no derivative there
+    U = 0.5 * rng.standard_normal((80, 1))
+    n, n_sx, n_par = model.n_states, model.n_state_params, model.n_params
+    Sx0 = np.hstack([0.1 * rng.standard_normal((n, n_sx)), np.eye(n)])  # mid-signal, start-state columns last
+    x0 = 0.1 * rng.standard_normal(n)
+    assert np.abs(model.simulate_states(U, x0)).max() > 0.3
+    lo, hi = model.bounds.T.copy()
+    args = (model.A, model.B, model.C, model.D, model.E, model.F, model.exE, model.exF, lo, hi, U)
+
+    def run(edges):
+        J = np.full((U.shape[0] - 4, 2, n_par + n), np.nan)
+        Sx, x_end = Sx0.copy(), np.empty(n)
+        for c0, c1 in zip(edges[:-1], edges[1:]):
+            x_span = np.empty(n)
+            pnlss_jacobian(*args, x0.copy(), x_span, Sx, 4, J, c0, c1)
+            if c0 == 0:
+                x_end = x_span
+            else:
+                np.testing.assert_array_equal(x_span, x_end)
+        return J, Sx, x_end
+
+    whole, S_whole, x_whole = run([0, n_sx + n])
+    assert np.all(np.isfinite(whole))
+    for edges in ([0, 5, n_sx + n], [0, n_sx, n_sx + n], [0, n_sx + 1, n_sx + n], [0, 17, 40, n_sx + 2, n_sx + n]):
+        J, S, x_end = run(edges)
+        np.testing.assert_allclose(J, whole, rtol=1e-12, atol=1e-14)
+        np.testing.assert_allclose(S, S_whole, rtol=1e-12, atol=1e-14)
+        np.testing.assert_array_equal(x_end, x_whole)

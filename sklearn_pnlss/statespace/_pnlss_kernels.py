@@ -47,31 +47,92 @@ def _powers(s, pw):
             pw[v, e] = pw[v, e - 1] * s[v]
 
 
+@numba.njit(cache=True, nogil=True)
+def _monomial_tables(exps, n, width):
+    """Where each monomial and each of its state derivatives reads its
+    factors, as flat indices into the powers table ``pw`` (``width``
+    columns): a monomial of degree d holds at most d variables, so it costs
+    a few products, not one per variable (F-16, ten states, degrees 2 and
+    3: 650 derivatives against 2,750 entries of the dense loops, which were
+    40 % of the Jacobian's recursion).
+
+    Returns ``values`` (n_mon, c): the factors of monomial j (padded with
+    index 0, ``pw[0, 0] = 1``); and, one entry per (monomial j, state k)
+    that can be nonzero, ``rows`` j, ``states`` k, ``coefs`` (the exponent)
+    and ``factors`` (n_d, c): d monomial_j / d x_k = coef * prod of pw at
+    factors, the derivative's own power first, the others in increasing
+    order (the products of the dense loops, without their unit factors).
+    """
+    n_mon, n_vars = exps.shape
+    c, n_d = 1, 0
+    for j in range(n_mon):
+        held = 0
+        for v in range(n_vars):
+            if exps[j, v] > 0:
+                held += 1
+                if v < n:
+                    n_d += 1
+        c = max(c, held)
+    values = np.zeros((n_mon, c), dtype=np.int64)
+    rows = np.empty(n_d, dtype=np.int64)
+    states = np.empty(n_d, dtype=np.int64)
+    coefs = np.empty(n_d)
+    factors = np.zeros((n_d, c), dtype=np.int64)
+    r = 0
+    for j in range(n_mon):
+        a = 0
+        for v in range(n_vars):
+            if exps[j, v] > 0:
+                values[j, a] = v * width + exps[j, v]
+                a += 1
+        for k in range(min(n, n_vars)):
+            e = exps[j, k]
+            if e == 0:
+                continue
+            rows[r], states[r], coefs[r] = j, k, e
+            factors[r, 0] = k * width + e - 1
+            b = 1
+            for v in range(n_vars):
+                if v != k and exps[j, v] > 0:
+                    factors[r, b] = v * width + exps[j, v]
+                    b += 1
+            r += 1
+    return values, rows, states, coefs, factors
+
+
 @_jit
-def _monomial_values(exps, pw, out):
-    for j in range(exps.shape[0]):
+def _monomial_values(values, pwf, out):
+    """The monomials from the flat powers table (see _monomial_tables)."""
+    for j in range(values.shape[0]):
         val = 1.0
-        for v in range(exps.shape[1]):
-            val *= pw[v, exps[j, v]]
+        for a in range(values.shape[1]):
+            val *= pwf[values[j, a]]
         out[j] = val
 
 
 @_jit
-def _state_derivatives(exps, pw, n, dout):
-    """dout[j, k] = d monomial_j / d x_k for the n states (the inputs are
-    given, so their derivatives are never needed)."""
-    n_vars = exps.shape[1]
-    for j in range(exps.shape[0]):
+def _linearised(L, Wt, tables, pwf, inside, work, out):
+    """out = L + W dmon/dx: the local linear map of x (A + E dzeta/dx, or
+    C + F deta/dx), each derivative of the monomials formed where it is
+    used (see _monomial_tables); none through a state held at its edge.
+    ``Wt`` is W transposed and ``work`` (n, rows of L) a scratch array: the
+    sum runs along W's columns, contiguous there."""
+    _, rows, states, coefs, factors = tables
+    n, n_out = L.shape[1], L.shape[0]
+    work[:, :] = 0.0
+    for r in range(rows.shape[0]):
+        k = states[r]
+        if not inside[k]:
+            continue
+        d = coefs[r]
+        for b in range(factors.shape[1]):
+            d *= pwf[factors[r, b]]
+        j = rows[r]
+        for i in range(n_out):
+            work[k, i] += Wt[j, i] * d
+    for i in range(n_out):
         for k in range(n):
-            e = exps[j, k]
-            if e == 0:
-                dout[j, k] = 0.0
-                continue
-            d = e * pw[k, e - 1]
-            for w in range(n_vars):
-                if w != k:
-                    d *= pw[w, exps[j, w]]
-            dout[j, k] = d
+            out[i, k] = L[i, k] + work[k, i]
 
 
 @numba.njit(cache=True, nogil=True)
@@ -103,15 +164,6 @@ def _hold(s, lo, hi, inside):
 
 
 @_jit
-def _zero_held(dterms, inside):
-    """No dependence of the monomials on a state held at its edge."""
-    for k in range(dterms.shape[1]):
-        if not inside[k]:
-            for j in range(dterms.shape[0]):
-                dterms[j, k] = 0.0
-
-
-@_jit
 def _affine(M, v, N, w, P, z, out):
     """out = M v + N w + P z (the state or output update)."""
     for i in range(out.shape[0]):
@@ -123,24 +175,6 @@ def _affine(M, v, N, w, P, z, out):
         for k in range(z.shape[0]):
             acc += P[i, k] * z[k]
         out[i] = acc
-
-
-@_jit
-def _linearised(L, W, dterms, out):
-    """out = L + W dterms: the local linear map of x (A + E dzeta/dx, or
-    C + F deta/dx)."""
-    if L.shape[0] * W.shape[1] * L.shape[1] >= _BLAS_FROM:
-        np.dot(W, dterms, out)
-        for i in range(L.shape[0]):
-            for k in range(L.shape[1]):
-                out[i, k] += L[i, k]
-        return
-    for i in range(L.shape[0]):
-        for k in range(L.shape[1]):
-            acc = L[i, k]
-            for j in range(W.shape[1]):
-                acc += W[i, j] * dterms[j, k]
-            out[i, k] = acc
 
 
 @_jit
@@ -172,10 +206,13 @@ def pnlss_simulate(A, B, C, D, E, F, exE, exF, lo, hi, U, x0):
     n = A.shape[0]
     p = C.shape[0]
     pw = np.empty((n + m, _max_degree(exE, exF) + 1))
+    pwf = pw.reshape(-1)
     s = np.empty(n + m)
     inside = np.empty(n + m, dtype=np.bool_)
     zeta = np.empty(exE.shape[0])
     eta = np.empty(exF.shape[0])
+    valE = _monomial_tables(exE, n, pw.shape[1])[0]
+    valF = _monomial_tables(exF, n, pw.shape[1])[0]
     Y = np.empty((N, p))
     X = np.empty((N, n))
     x = x0.copy()
@@ -184,8 +221,8 @@ def pnlss_simulate(A, B, C, D, E, F, exE, exF, lo, hi, U, x0):
         _stack(x, U[t], s)
         _hold(s, lo, hi, inside)
         _powers(s, pw)
-        _monomial_values(exE, pw, zeta)
-        _monomial_values(exF, pw, eta)
+        _monomial_values(valE, pwf, zeta)
+        _monomial_values(valF, pwf, eta)
         X[t] = x
         _affine(C, x, D, U[t], F, eta, Y[t])
         _affine(A, x, B, U[t], E, zeta, x_next)
@@ -196,18 +233,32 @@ def pnlss_simulate(A, B, C, D, E, F, exE, exF, lo, hi, U, x0):
     return Y, X, N, x
 
 
+@_jit
+def _add_direct(S, i, base, values, c0, c1):
+    """S[i, base + k - c0] += values[k] for the columns base + k inside
+    [c0, c1): a parameter row's direct term, on the columns held."""
+    for k in range(max(0, c0 - base), min(values.shape[0], c1 - base)):
+        S[i, base + k - c0] += values[k]
+
+
 @numba.njit(cache=True, nogil=True)
-def pnlss_jacobian(A, B, C, D, E, F, exE, exF, lo, hi, U, x, Sx, n_skip, J):
+def pnlss_jacobian(A, B, C, D, E, F, exE, exF, lo, hi, U, x, x_end, Sx, n_skip, J, c0, c1):
     """Output sensitivities dy(t)/dtheta for t >= n_skip, written to
     J[(t - n_skip), :, :] (shape (N - n_skip, p, n_theta)).
 
     Resumable, so that a long signal can be taken in blocks of samples
     (memory): ``x`` (n,) is the state and ``Sx`` (n, n_sx) its sensitivity
-    to the parameters that move the state at the first sample of ``U``; both
-    are advanced in place to the sample after the last. ``Sx`` may carry
-    more columns than the n_sx parameters: sensitivities to a start state,
-    propagated without direct terms and written to the last columns of
-    ``J`` (after the parameters'; see ``StateSpaceModel.jacobian_blocks``).
+    to the parameters that move the state at the first sample of ``U``; the
+    state after the last sample is written to ``x_end`` and ``Sx`` advanced
+    in place. ``Sx`` may carry more columns than the n_sx parameters:
+    sensitivities to a start state, propagated without direct terms and
+    written to the last columns of ``J`` (after the parameters'; see
+    ``StateSpaceModel.jacobian_blocks``).
+
+    Only the columns ``c0:c1`` of ``Sx`` are carried (and their columns of
+    ``J`` written; the one that starts at 0 writes the output parameters'
+    too): each column's recursion depends on the state alone, so threads
+    given disjoint ranges share the work, each simulating the state itself.
 
     The sensitivities are carried through the local linear map by a matrix
     product (BLAS): it is the bulk of the arithmetic, n^2 n_sx per sample,
@@ -222,22 +273,31 @@ def pnlss_jacobian(A, B, C, D, E, F, exE, exF, lo, hi, U, x, Sx, n_skip, J):
     n_sx = n * n + n * m + n * nE  # parameters that move the state
     n_cols = Sx.shape[1]  # and the start-state columns after them
     n_par = J.shape[2] - (n_cols - n_sx)
+    w = c1 - c0
     oA, oB, oE = 0, n * n, n * n + n * m
     oC = n_sx
     oD = oC + p * n
     oF = oD + p * m
     pw = np.empty((n + m, _max_degree(exE, exF) + 1))
+    pwf = pw.reshape(-1)
     s = np.empty(n + m)
     inside = np.empty(n + m, dtype=np.bool_)
     zeta = np.empty(nE)
-    dzeta = np.empty((nE, n))
     eta = np.empty(nF)
-    deta = np.empty((nF, n))
-    S = Sx.copy()  # contiguous work copies, swapped every sample
-    S_next = np.empty((n, n_cols))
-    Jx = np.empty((p, n_cols))
-    Ax = np.empty((n, n))  # A + E dzeta/dx
-    Cx = np.empty((p, n))  # C + F deta/dx
+    tabE = _monomial_tables(exE, n, pw.shape[1])
+    tabF = _monomial_tables(exF, n, pw.shape[1])
+    # The state's and the output's local linear maps stacked, M = [Ax; Cx],
+    # so one product M S carries the sensitivities to the next state and to
+    # the output (S read once per sample). Two work arrays, swapped every
+    # sample: S is the first n rows of one, the product goes to the other.
+    M = np.empty((n + p, n))
+    Ax, Cx = M[:n], M[n:]  # A + E dzeta/dx, C + F deta/dx
+    P = np.empty((n + p, w))
+    P_next = np.empty((n + p, w))
+    P[:n] = Sx[:, c0:c1]
+    Et, Ft = E.T.copy(), F.T.copy()  # see _linearised
+    work = np.empty((n, n + p))
+    n_own = max(0, min(w, n_sx - c0))  # the span's columns of parameters, then of the start state
     x_now = x.copy()
     x_next = np.empty(n)
     for t in range(N):
@@ -245,42 +305,39 @@ def pnlss_jacobian(A, B, C, D, E, F, exE, exF, lo, hi, U, x, Sx, n_skip, J):
         _stack(x_now, u, s)
         _hold(s, lo, hi, inside)
         _powers(s, pw)
-        _monomial_values(exE, pw, zeta)
-        _state_derivatives(exE, pw, n, dzeta)
-        _zero_held(dzeta, inside)
-        _linearised(A, E, dzeta, Ax)
+        _monomial_values(tabE[0], pwf, zeta)
+        _linearised(A, Et, tabE, pwf, inside, work, Ax)
+        S = P[:n]
         if t >= n_skip:
-            _monomial_values(exF, pw, eta)
-            _state_derivatives(exF, pw, n, deta)
-            _zero_held(deta, inside)
-            _linearised(C, F, deta, Cx)
-            _carry(Cx, S, Jx)
+            _monomial_values(tabF[0], pwf, eta)
+            _linearised(C, Ft, tabF, pwf, inside, work, Cx)
+            _carry(M, S, P_next)
             Jt = J[t - n_skip]
             for a in range(p):
-                for q in range(n_sx):
-                    Jt[a, q] = Jx[a, q]
-                for q in range(n_sx, n_par):
-                    Jt[a, q] = 0.0
-                for q in range(n_sx, n_cols):
-                    Jt[a, n_par + q - n_sx] = Jx[a, q]
-                for k in range(n):
-                    Jt[a, oC + a * n + k] = x_now[k]
-                for k in range(m):
-                    Jt[a, oD + a * m + k] = u[k]
-                for k in range(nF):
-                    Jt[a, oF + a * nF + k] = eta[k]
+                Jx = P_next[n + a]
+                for q in range(n_own):
+                    Jt[a, c0 + q] = Jx[q]
+                for q in range(n_own, w):
+                    Jt[a, n_par + c0 + q - n_sx] = Jx[q]
+                if c0 == 0:
+                    for q in range(n_sx, n_par):
+                        Jt[a, q] = 0.0
+                    for k in range(n):
+                        Jt[a, oC + a * n + k] = x_now[k]
+                    for k in range(m):
+                        Jt[a, oD + a * m + k] = u[k]
+                    for k in range(nF):
+                        Jt[a, oF + a * nF + k] = eta[k]
+        else:
+            _carry(Ax, S, P_next[:n])
         # Sensitivity of the next state: the propagated part, then the
         # direct dependence of row i on its own parameters.
-        _carry(Ax, S, S_next)
         for i in range(n):
-            for k in range(n):
-                S_next[i, oA + i * n + k] += x_now[k]
-            for k in range(m):
-                S_next[i, oB + i * m + k] += u[k]
-            for k in range(nE):
-                S_next[i, oE + i * nE + k] += zeta[k]
-        S, S_next = S_next, S
+            _add_direct(P_next, i, oA + i * n, x_now, c0, c1)
+            _add_direct(P_next, i, oB + i * m, u, c0, c1)
+            _add_direct(P_next, i, oE + i * nE, zeta, c0, c1)
+        P, P_next = P_next, P
         _affine(A, x_now, B, u, E, zeta, x_next)
         x_now, x_next = x_next, x_now
-    x[:] = x_now
-    Sx[:, :] = S
+    x_end[:] = x_now
+    Sx[:, c0:c1] = P[:n]

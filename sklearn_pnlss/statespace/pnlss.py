@@ -3,10 +3,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..utils.threads import over_column_spans
 from ._pnlss_kernels import pnlss_jacobian, pnlss_simulate
 from .model_base import DivergenceError, Segment, StateSpaceModel, unbounded
 
 __all__ = ["PNLSSModel", "Segment"]
+
+# The fewest sensitivity columns a thread of the Jacobian's recursion is
+# given: each thread also simulates the state and its local linear map.
+MIN_SPAN_COLUMNS = 256
 
 
 @dataclass
@@ -76,4 +81,13 @@ class PNLSSModel(StateSpaceModel):
 
     def _sensitivity(self, U, x, Sx, n_skip, J):
         lo, hi = self._bounds()
-        pnlss_jacobian(self.A, self.B, self.C, self.D, self.E, self.F, self.exE, self.exF, lo, hi, U, x, Sx, n_skip, J)
+        x_end = np.empty_like(x)
+
+        def span(c0, c1):
+            pnlss_jacobian(self.A, self.B, self.C, self.D, self.E, self.F, self.exE, self.exF, lo, hi, U, x, x_end,
+                           Sx, n_skip, J, c0, c1)
+
+        # The columns' recursions share the cores; each span simulates the
+        # state itself, which only pays beside enough columns.
+        over_column_spans(span, Sx.shape[1], MIN_SPAN_COLUMNS)
+        x[:] = x_end

@@ -1,5 +1,6 @@
 """The library's own threads: independent signals simulated side by side,
-and BLAS on one thread meanwhile."""
+the independent columns of a recursion shared out, and BLAS on one thread
+meanwhile."""
 import os
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import nullcontext
@@ -7,7 +8,7 @@ from functools import lru_cache
 
 from threadpoolctl import ThreadpoolController
 
-__all__ = ["one_blas_thread", "blas_threads_for", "each_in_threads"]
+__all__ = ["one_blas_thread", "blas_threads_for", "each_in_threads", "over_column_spans"]
 
 _CONTROLLER = None  # made once: each one scans the loaded libraries (tens of ms)
 
@@ -23,10 +24,21 @@ def one_blas_thread():
     21.4 s and 38 s with one BLAS thread; 20 Bouc-Wen realisations took
     10 s per 10 iterations instead of 4 s.
     """
+    return _controller().limit(limits=1, user_api="blas")
+
+
+def _controller():
     global _CONTROLLER
     if _CONTROLLER is None:
         _CONTROLLER = ThreadpoolController()
-    return _CONTROLLER.limit(limits=1, user_api="blas")
+    return _CONTROLLER
+
+
+def blas_thread_count():
+    """The threads BLAS may use here and now: one inside
+    :func:`one_blas_thread` (the library's threads over signals), a worker's
+    share inside a joblib grid search, all cores by default."""
+    return max((lib.num_threads for lib in _controller().select(user_api="blas").lib_controllers), default=1)
 
 
 #: Floating-point operations of a linear-algebra step below which BLAS threads
@@ -61,3 +73,34 @@ def each_in_threads(func, *columns):
     if len(rows) < 2 or (os.cpu_count() or 1) < 2:
         return [func(*row) for row in rows]
     return [f.result() for f in [_pool().submit(func, *row) for row in rows]]
+
+
+@lru_cache(maxsize=1)
+def _span_pool():
+    """The threads that share out a recursion's columns, made once (apart
+    from ``_pool``: a span never waits on a signal's thread, nor one on it)."""
+    return ThreadPoolExecutor(max_workers=max(1, (os.cpu_count() or 1) - 1), thread_name_prefix="spans")
+
+
+def over_column_spans(func, n_columns, min_span):
+    """``func(c0, c1)`` on consecutive spans of ``range(n_columns)``, side by
+    side: as many spans as BLAS may use threads here (see
+    :func:`blas_thread_count`), none narrower than ``min_span``; BLAS on one
+    thread meanwhile.
+
+    For a recursion whose columns are independent (the sensitivities of a
+    Jacobian, one column per parameter): it runs on the cores that the
+    Jacobian's Gram matrix gets from BLAS, where it would otherwise keep one
+    busy and leave the rest idle. Inside the library's threads over signals
+    (BLAS on one thread there) it runs whole, in the caller's thread.
+    """
+    k = max(1, min(blas_thread_count(), os.cpu_count() or 1, n_columns // max(1, min_span)))
+    if k == 1:
+        func(0, n_columns)
+        return
+    edges = [n_columns * i // k for i in range(k + 1)]
+    with one_blas_thread():
+        others = [_span_pool().submit(func, a, b) for a, b in zip(edges[1:-1], edges[2:])]
+        func(edges[0], edges[1])
+        for f in others:
+            f.result()
