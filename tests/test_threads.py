@@ -1,0 +1,53 @@
+"""The library's own threads: BLAS limited while they run and restored
+after, even when uses overlap; a recursion's columns shared out in spans."""
+import threading
+
+import pytest
+
+from sklearn_pnlss.utils import threads
+from sklearn_pnlss.utils.threads import blas_thread_count, one_blas_thread, over_column_spans
+
+
+def test_overlapping_limits_restore_blas_when_the_last_ends():
+    before = blas_thread_count()
+    inside, released = threading.Event(), threading.Event()
+    seen = {}
+
+    def first():  # in first, out last
+        with one_blas_thread():
+            inside.set()
+            released.wait(5)
+
+    def second():
+        inside.wait(5)
+        with one_blas_thread():
+            pass
+        seen["while the first holds it"] = blas_thread_count()
+        released.set()
+
+    workers = [threading.Thread(target=first), threading.Thread(target=second)]
+    for w in workers:
+        w.start()
+    for w in workers:
+        w.join()
+    assert seen["while the first holds it"] == 1
+    assert blas_thread_count() == before
+
+
+@pytest.mark.parametrize("blas, n_columns, min_span, spans", [
+    (2, 1000, 256, [(0, 500), (500, 1000)]),
+    (4, 1000, 256, [(0, 333), (333, 666), (666, 1000)]),  # no span narrower than min_span
+    (2, 300, 256, [(0, 300)]),
+    (1, 5000, 256, [(0, 5000)]),  # BLAS on one thread here: the caller's thread alone
+])
+def test_columns_are_shared_out_in_consecutive_spans(monkeypatch, blas, n_columns, min_span, spans):
+    monkeypatch.setattr(threads, "blas_thread_count", lambda: blas)
+    monkeypatch.setattr(threads.os, "cpu_count", lambda: 8)
+    done, caller = [], threading.get_ident()
+
+    def span(c0, c1):
+        done.append((c0, c1, threading.get_ident() == caller))
+
+    over_column_spans(span, n_columns, min_span)
+    assert sorted(d[:2] for d in done) == spans
+    assert [d[:2] for d in done if d[2]] == [spans[0]]  # the first in the caller's thread
