@@ -361,23 +361,16 @@ def _f16_iteration(key):
     return _f16_model("PNLSSRegressor(10, (2, 3), states)")["per_iteration_s"][key]
 
 
-def _f16_fixed():
-    """The full PNLSS row of bench_f16.py rerun alone once time weights kept
-    the Jacobian's precision (f16_pnlss.json)."""
-    return next(r for r in _results("f16_pnlss")["models"] if r["model"]["estimator"].startswith("PNLSSRegressor"))
-
-
 def _f16_step():
     """The step's share of that iteration: the solver's setup and solves."""
     return _f16_iteration("step solver setup") + _f16_iteration("step solves")
 
 
-def _f16_floor(level=None, key="out_of_band_floor", name="f16"):
+def _f16_floor(level=None, key="out_of_band_floor"):
     """A floor of bench_f16.py as an NRMSE (``key``: the test outputs' power
     above the excited band, or ``non_periodic_floor``, their change from
-    period to period, in results ``name``): the mean, or one level's per
-    output."""
-    floor = _results(name)[key]
+    period to period): the mean, or one level's per output."""
+    floor = _results("f16")[key]
     return [floor["mean"]] if level is None else floor["nrmse"][str(level)]
 
 
@@ -1009,9 +1002,8 @@ FIGURES = [
     Figure(R, "That part alone is an NRMSE of 0.132 in the mean", F16, _f16_floor),
     Figure(R, "(0.204 / 0.106 / 0.334 on level 6)", F16, lambda: [*_f16_floor(6), 6]),
     Figure(R, "0.13 needs a model of those modes", F16, lambda: [0.13]),
-    Figure(R, "an NRMSE of 0.050 in the mean and 0.071 / 0.044 / 0.122 on level 6", "bench_f16.py --decoupled: "
-              "f16_pnlss.json", lambda: [*_f16_floor(key="non_periodic_floor", name="f16_pnlss"),
-                                        *_f16_floor(6, "non_periodic_floor", "f16_pnlss"), 6]),
+    Figure(R, "an NRMSE of 0.050 in the mean and 0.071 / 0.044 / 0.122 on level 6", F16,
+           lambda: [*_f16_floor(key="non_periodic_floor"), *_f16_floor(6, "non_periodic_floor"), 6]),
     Figure(R, "a causal FIR of 300 taps fitted on the training levels' residual) brings level 6 to 0.123 / 0.111 / "
               "0.244, beside the deep LRU's 0.134 / 0.099 / 0.237, but the payload's level 2 from 0.152 to 0.234",
            F16, lambda: [_f16_force("taps"), 6, *_f16_force("nrmse_with_map")["6"], *_f16_lru_level_6(), 2,
@@ -1023,7 +1015,7 @@ FIGURES = [
                     _f16_force("force_power_growth_in_band"), min(_f16_force("output_power_growth_above")),
                     max(_f16_force("output_power_growth_above"))]),
     Figure(R, "whose dynamics come from the 2-15 Hz band does not produce", F16, lambda: [2, 15]),
-    Figure(PN, "it adds 772 coefficients to a decoupled model of 18 states, fitted in 2.8 s; the mean test NRMSE "
+    Figure(PN, "it adds 772 coefficients to a decoupled model of 18 states, fitted in 2.4 s; the mean test NRMSE "
                "over levels 2, 4 and 6 goes from 0.182 to 0.162 for the model chosen on held-out estimation levels "
                "and from 0.179 to 0.158", F16,
            lambda: [_f16_model(_f16_above(_f16_selected()))["n_above_band_params"], 18,
@@ -1037,7 +1029,7 @@ FIGURES = [
                     min(_f16_force("output_power_growth_above")), max(_f16_force("output_power_growth_above"))]),
 
     Figure(R, "| `AboveBandRegressor` around the last two: their response above the excited band (772 more "
-              "coefficients, linear) | 120 / 141 | 0.158 / 0.162 | 384.3 s / 401.2 s |", F16,
+              "coefficients, linear) | 120 / 141 | 0.158 / 0.162 | 188.9 s / 193.7 s |", F16,
            lambda: [_f16_model(_f16_above(m))["n_params"] - _f16_model(m)["n_params"] if i == 0 else None
                     for i, m in enumerate(("DecoupledPNLSSRegressor(18, 3, 3) random", _f16_selected()))][:1]
            + [_f16_row(_f16_above(m))[k] for k in range(3)
@@ -1060,24 +1052,24 @@ FIGURES = [
 
     Figure(CONV, "alone is an NRMSE of 0.132 in the mean", F16, _f16_floor),
     Figure(R, "levels 2, 4 and 6, 10 states, 2 cores)", F16, lambda: [2, 4, 6, 10, _results("f16")["environment"]["cpu_count"]]),
-    Figure(R, "| `BLAEstimator(10)` | 0 | 0.428 | 3.0 s |", F16, lambda: [10, *_f16_row("BLAEstimator(10)")]),
-    Figure(R, "| `DecoupledPNLSSRegressor(10, n_branches=3, degree=5, init=\"random\")` | 78 | 0.228 | 93.2 s |", F16,
+    Figure(R, "| `BLAEstimator(10)` | 0 | 0.428 | 1.4 s |", F16, lambda: [10, *_f16_row("BLAEstimator(10)")]),
+    Figure(R, "| `DecoupledPNLSSRegressor(10, n_branches=3, degree=5, init=\"random\")` | 78 | 0.228 | 48.4 s |", F16,
            lambda: [10, 3, 5, *_f16_row("DecoupledPNLSSRegressor(10, 3, 5) random")]),
     *(Figure(R, f"| `DecoupledPNLSSRegressor({n}, n_branches=3, degree=3, init=\"random\")` | {text}", F16,
              lambda n=n: [n, 3, 3, *_f16_row(f"DecoupledPNLSSRegressor({n}, 3, 3) random")])
-      for n, text in ((14, "96 | 0.183 | 124.9 s |"), (18, "120 | 0.179 | 382.0 s |"))),
+      for n, text in ((14, "96 | 0.183 | 67.5 s |"), (18, "120 | 0.179 | 186.9 s |"))),
     Figure(DEC, "three branches of degree 3 on 18 states (120 nonlinear parameters, where the full polynomial of "
                 "degree 3 would have 23598)", F16,
            lambda: [3, 18, _f16_row("DecoupledPNLSSRegressor(18, 3, 3) random")[0], 3,
                     18 * (math.comb(19, 2) + math.comb(20, 3))]),
-    Figure(DEC, "a mean test NRMSE of 0.179 in 382.0 s, against 0.194 for the full model of ten states and 0.218",
+    Figure(DEC, "a mean test NRMSE of 0.179 in 186.9 s, against 0.194 for the full model of ten states and 0.218",
            F16, lambda: [*_f16_row("DecoupledPNLSSRegressor(18, 3, 3) random")[1:],
                          _f16_row("PNLSSRegressor(10, (2, 3), states)")[1],
                          _f16_row("DecoupledPNLSSRegressor(10, 3, 3) random")[1]]),
     Figure(R, "(18 states would give it 23598 coefficients)", "the count of bench_f16.py's full polynomial",
            lambda: [18, 18 * (math.comb(19, 2) + math.comb(20, 3))]),
     Figure(R, "| the same with spline branches (`n_knots=8`), chosen on held-out estimation levels | 141 | 0.182 | "
-              "398.4 s |", F16, lambda: [8, *_f16_row(_f16_selected())]),
+              "191.3 s |", F16, lambda: [8, *_f16_row(_f16_selected())]),
     Figure(R, "holds out estimation levels 3 and 5 in turn", F16,
            lambda: [int(k[1:]) for k in _results("f16")["selection"]["grid"][0]["held_out_nrmse"]]),
     Figure(R, "Three spline branches on 8 knots do best there (held-out NRMSE 0.178 in the mean; polynomial branches "
@@ -1100,36 +1092,28 @@ FIGURES = [
     Figure(R, "(42.74 dB against 43.83 dB at 14 states and 45.21 dB at 10)", F16,
            lambda: [_f16_model(f"DecoupledPNLSSRegressor({n}, 3, 3) random")["train_cost_db"] for n in (18, 14)]
            + [14, _f16_model("DecoupledPNLSSRegressor(10, 3, 3) random")["train_cost_db"], 10]),
-    Figure(R, "| `PNLSSRegressor(10, degrees=(2, 3), variables=\"states\")`, 20 iterations | 2750 | 0.194 | 307.9 s |",
+    Figure(R, "| `PNLSSRegressor(10, degrees=(2, 3), variables=\"states\")`, 20 iterations | 2750 | 0.194 | 98.8 s |",
            F16, lambda: [10, 2, 3, _f16_model("PNLSSRegressor(10, (2, 3), states)")["n_iter"],
                          *_f16_row("PNLSSRegressor(10, (2, 3), states)")]),
     Figure(R, "| recurrent equilibrium network (Revay et al., 2023) | | 0.162 |", "the published figure",
            lambda: [2023, next(iter(_results("f16")["published"].values()))["mean"]]),
-    Figure(R, "(2893 parameters and 98304 residuals) took 15.4 s in the committed run, where the J^T J needs 5.02 s",
+    Figure(R, "(2893 parameters and 98304 residuals) takes 4.94 s, where its Gram matrix J^T J needs 2.61 s",
            F16,
            lambda: [_f16_model("PNLSSRegressor(10, (2, 3), states)")["n_params"],
                     _f16_model("PNLSSRegressor(10, (2, 3), states)")["gram_rows"],
                     _f16_model("PNLSSRegressor(10, (2, 3), states)")["fit_s"]
                     / _f16_model("PNLSSRegressor(10, (2, 3), states)")["n_iter"],
                     _f16_iteration("J'J at the measured BLAS rate")]),
-    Figure(R, "(the Gram matrix, the gradient and a simulation: 12.11 s)", F16,
-           lambda: [_f16_iteration("J'J, J'e and a simulation")]),
-    Figure(R, "takes 10.7 s an iteration, the Gram matrix, the gradient and a simulation 7.62 s where the J^T J "
-              "needs 5.91 s, with the same test NRMSE, 0.194", "bench_f16.py --decoupled: f16_pnlss.json",
-           lambda: [_f16_fixed()["fit_s"] / _f16_fixed()["n_iter"],
-                    *(_f16_fixed()["per_iteration_s"][k] for k in ("J'J, J'e and a simulation",
-                                                                   "J'J at the measured BLAS rate")),
-                    _f16_fixed()["mean_nrmse"]]
-           if _f16_fixed()["model"]["weighting"] == "relative" else [None]),
-    Figure(R, "sensitivity recursion takes 1.97 s of it", F16, lambda: [_f16_iteration("sensitivity kernel")]),
-    Figure(R, "the step 0.51 s (a Cholesky factorisation per trial, where the eigendecomposition would take 3.06 s)",
+    Figure(R, "the Gram matrix, the gradient and a simulation take 3.45 s, the sensitivity recursion 0.95 s", F16,
+           lambda: [_f16_iteration("J'J, J'e and a simulation"), _f16_iteration("sensitivity kernel")]),
+    Figure(R, "the step 0.35 s (a Cholesky factorisation per trial, where the eigendecomposition would take 2.03 s)",
            F16, lambda: [_f16_step(), _f16_iteration("eigendecomposition instead (not used)")]),
-    Figure(PN, "its steps cost 0.51 s per iteration, where the eigendecomposition alone would take 3.06 s", F16,
+    Figure(PN, "its steps cost 0.35 s per iteration, where the eigendecomposition alone would take 2.03 s", F16,
            lambda: [_f16_step(), _f16_iteration("eigendecomposition instead (not used)")]),
     Figure(PN, "Above 1024 parameters the Jacobian is held in single precision", "the objective's rule",
            lambda: [objective.SINGLE_PRECISION_PARAMS]),
-    Figure(PN, "an iteration of 15.4 s, of which the Gram matrix, the gradient and a simulation took 12.11 s (the "
-               "single-precision rate needs 5.02 s for the Gram matrix) and the sensitivity recursion 1.97 s", F16,
+    Figure(PN, "iteration takes 4.94 s, of which the Gram matrix, the gradient and a simulation take 3.45 s (the "
+               "single-precision rate needs 2.61 s for the Gram matrix) and the sensitivity recursion 0.95 s", F16,
            lambda: [_f16_model("PNLSSRegressor(10, (2, 3), states)")["fit_s"]
                     / _f16_model("PNLSSRegressor(10, (2, 3), states)")["n_iter"],
                     _f16_iteration("J'J, J'e and a simulation"), _f16_iteration("J'J at the measured BLAS rate"),
