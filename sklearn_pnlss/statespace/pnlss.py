@@ -9,9 +9,17 @@ from .model_base import DivergenceError, Segment, StateSpaceModel, unbounded
 
 __all__ = ["PNLSSModel", "Segment"]
 
-# The fewest sensitivity columns a thread of the Jacobian's recursion is
-# given: each thread also simulates the state and its local linear map.
-MIN_SPAN_COLUMNS = 256
+# A thread of the Jacobian's recursion is given columns whose carrying
+# ((n + p) n multiply-adds per column and sample) costs at least this many
+# times the work it repeats: each thread simulates the state and forms its
+# local linear map itself (per sample, each state derivative of a monomial:
+# its factors and a column of n or p multiply-adds). The kernel alone gains
+# from two spans far below this (8,192 samples, 2 cores: 1.22 times faster
+# at a ratio of 9, 1.52 at 43), but inside a fit it follows the Gram
+# matrix, whose BLAS threads go on spinning for a while: 10-iteration
+# Bouc-Wen fits of 421 and 1,156 parameters ran 1.2 and 1.0 times as long
+# split, the F-16's (ratio 43: two spans) 0.8 times.
+SPAN_WORK_RATIO = 16
 
 
 @dataclass
@@ -79,6 +87,15 @@ class PNLSSModel(StateSpaceModel):
         lo, hi = self._bounds()
         return pnlss_simulate(self.A, self.B, self.C, self.D, self.E, self.F, self.exE, self.exF, lo, hi, U, x0)
 
+    def _span_columns(self):
+        """The fewest columns of the sensitivity recursion worth a thread
+        (see SPAN_WORK_RATIO)."""
+        n, p = self.A.shape[0], self.C.shape[0]
+        degree = max(1, int(self.exE.sum(axis=1).max(initial=0)), int(self.exF.sum(axis=1).max(initial=0)))
+        repeated = (np.count_nonzero(self.exE[:, :n]) * (degree + n) + np.count_nonzero(self.exF[:, :n]) * (degree + p)
+                    + self.exE.shape[0] + self.exF.shape[0])
+        return max(1, -(-SPAN_WORK_RATIO * repeated // ((n + p) * n)))
+
     def _sensitivity(self, U, x, Sx, n_skip, J):
         lo, hi = self._bounds()
         x_end = np.empty_like(x)
@@ -87,7 +104,5 @@ class PNLSSModel(StateSpaceModel):
             pnlss_jacobian(self.A, self.B, self.C, self.D, self.E, self.F, self.exE, self.exF, lo, hi, U, x, x_end,
                            Sx, n_skip, J, c0, c1)
 
-        # The columns' recursions share the cores; each span simulates the
-        # state itself, which only pays beside enough columns.
-        over_column_spans(span, Sx.shape[1], MIN_SPAN_COLUMNS)
+        over_column_spans(span, Sx.shape[1], self._span_columns())
         x[:] = x_end
