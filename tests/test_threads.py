@@ -5,11 +5,26 @@ import threading
 import pytest
 
 from sklearn_pnlss.utils import threads
-from sklearn_pnlss.utils.threads import blas_thread_count, one_blas_thread, over_column_spans
+from sklearn_pnlss.utils.threads import one_blas_thread, over_column_spans
 
 
-def test_overlapping_limits_restore_blas_when_the_last_ends():
-    before = blas_thread_count()
+def test_overlapping_limits_restore_blas_when_the_last_ends(monkeypatch):
+    """Two threads' uses that overlap, the first in ending last: BLAS is
+    limited once, at the first entry, and restored once, at the last exit
+    (threadpoolctl's limiter stood in for: what OpenBLAS reports from a new
+    thread depends on where it last ran)."""
+    calls = []
+
+    class Limiter:
+        def restore_original_limits(self):
+            calls.append("restore")
+
+    class Controller:
+        def limit(self, limits, user_api):
+            calls.append(("limit", limits, user_api))
+            return Limiter()
+
+    monkeypatch.setattr(threads, "_controller", lambda: Controller())
     inside, released = threading.Event(), threading.Event()
     seen = {}
 
@@ -22,7 +37,7 @@ def test_overlapping_limits_restore_blas_when_the_last_ends():
         inside.wait(5)
         with one_blas_thread():
             pass
-        seen["while the first holds it"] = blas_thread_count()
+        seen["after the second's exit"] = list(calls)
         released.set()
 
     workers = [threading.Thread(target=first), threading.Thread(target=second)]
@@ -30,8 +45,9 @@ def test_overlapping_limits_restore_blas_when_the_last_ends():
         w.start()
     for w in workers:
         w.join()
-    assert seen["while the first holds it"] == 1
-    assert blas_thread_count() == before
+    assert seen["after the second's exit"] == [("limit", 1, "blas")]
+    assert calls == [("limit", 1, "blas"), "restore"]
+    assert threads._LIMIT_USERS == 0
 
 
 @pytest.mark.parametrize("blas, n_columns, min_span, spans", [
