@@ -30,9 +30,9 @@ def one_blas_thread():
     10 s per 10 iterations instead of 4 s.
 
     Counted, so that overlapping uses from several threads (two fits side
-    by side, each sharing out its own work) restore BLAS only when the last
-    one ends: each restoring what it found would leave BLAS on one thread
-    when the first one in ends last.
+    by side, each over its own signals) restore BLAS only when the last one
+    ends: each restoring what it found would leave BLAS on one thread when
+    the first one in ends last.
     """
     global _LIMIT, _LIMIT_USERS
     with _LIMIT_LOCK:
