@@ -234,10 +234,11 @@ if train is not None:
 #   best is chosen without the test levels by holding out estimation levels
 #   3 and 5 in turn (``benchmarks/bench_f16.py --select``).
 # - **Large full models.** A Levenberg-Marquardt iteration of the full
-#   PNLSS model (2,893 parameters, 98,304 residuals) takes about 6 s on two
-#   cores of one machine and more than twice as long on another, most of it
-#   J^T J, which runs at the machine's BLAS rate: exact Gauss-Newton steps
-#   on a model of that size cannot be much cheaper.
+#   PNLSS model (2,893 parameters, 98,304 residuals) takes about 5 s on two
+#   cores (twice as long when the machine's BLAS runs at half its rate),
+#   half of it J^T J at the machine's BLAS rate, the sensitivity recursion
+#   sharing both cores: exact Gauss-Newton steps on a model of that size
+#   cannot be much cheaper.
 # - **Several outputs.** The three accelerations share one cost, each in
 #   units of its rms (and each level relative to its own power); weighting
 #   each by its noise (``weighting="noise"``) is not measured here.
