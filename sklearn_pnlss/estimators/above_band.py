@@ -97,6 +97,15 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
     n_taps : int, default=200
         Length of each FIR filter in samples: as long as the higher modes
         ring (0.5 s at the F-16's 400 Hz).
+    n_lead : int, default=0
+        How many of the taps reach ahead: ``y_above(t) = sum_j h_j w(t +
+        n_lead - j)`` for the gated input ``w``. 0 keeps the model causal.
+        A measured force can show an impact later than a sensor nearer the
+        joint does (the shaker feels the structure's ringing as it builds
+        up); a lead lets the filters read it there, and makes the model a
+        map of the whole measured record rather than a simulator: the
+        prediction at t uses the input up to ``n_lead`` samples after t.
+        Below ``n_taps``.
     alpha : float, default=1e-4
         Ridge penalty of the FIR fit, relative to the mean diagonal of its
         normal matrix.
@@ -111,8 +120,8 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         Coefficients of ``q``: a constant, then ``x_i x_j`` (``i <= j``, as
         :func:`numpy.triu_indices` orders them) of the scaled states.
     fir_ : ndarray of shape (n_inputs, n_taps, n_outputs)
-        ``fir_[i, j, k]``: from the gated input ``i`` delayed ``j`` samples
-        to output ``k``.
+        ``fir_[i, j, k]``: from the gated input ``i`` delayed ``j - n_lead``
+        samples to output ``k``.
     above_band_rms_ : ndarray of shape (n_outputs,)
         The rms of the regressor's training error above ``cutoff``.
     explained_fraction_ : ndarray of shape (n_outputs,)
@@ -158,14 +167,16 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         "cutoff": [Interval(Real, 0, None, closed="neither"), None],
         "fs": [Interval(Real, 0, None, closed="neither")],
         "n_taps": [Interval(Integral, 1, None, closed="left")],
+        "n_lead": [Interval(Integral, 0, None, closed="left")],
         "alpha": [Interval(Real, 0, None, closed="left")],
     }
 
-    def __init__(self, regressor=None, *, cutoff=None, fs=1.0, n_taps=200, alpha=1e-4):
+    def __init__(self, regressor=None, *, cutoff=None, fs=1.0, n_taps=200, n_lead=0, alpha=1e-4):
         self.regressor = regressor
         self.cutoff = cutoff
         self.fs = fs
         self.n_taps = n_taps
+        self.n_lead = n_lead
         self.alpha = alpha
 
     @validates_parameters
@@ -192,6 +203,9 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         if self.cutoff >= self.fs / 2:
             raise ValueError(f"cutoff={self.cutoff} is at or above the Nyquist frequency fs / 2 = "
                              f"{self.fs / 2}; nothing lies above it. Pass a cutoff below fs / 2.")
+        if self.n_lead >= self.n_taps:
+            raise ValueError(f"n_lead={self.n_lead} must be below n_taps={self.n_taps}: the filters reach from "
+                             "n_lead samples ahead to n_taps - n_lead - 1 behind. Lower n_lead or raise n_taps.")
         X_list, y_list, _ = validate_signals(self, X, y, reset=True)
         self.regressor_ = clone(self.regressor) if self.regressor is not None else BLAEstimator()
         self.regressor_.fit(X, y, **fit_params)
@@ -226,9 +240,16 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         return quadratic_features(x / self.state_scale_)
 
     def _gated(self, signal):
-        """The input above ``cutoff``, gated by the states (and kept above it)."""
+        """The input above ``cutoff``, gated by the states (and kept above
+        it), ``n_lead`` samples ahead: circularly on a periodic signal, with
+        nothing after the end of another."""
         g = gate(signal.states, self.gate_coef_, self._features)
-        return above_cutoff(g[:, None] * signal.input_above, self.cutoff, self.fs)
+        w = above_cutoff(g[:, None] * signal.input_above, self.cutoff, self.fs)
+        if self.n_lead == 0:
+            return w
+        if signal.periodic:
+            return np.roll(w, -self.n_lead, axis=0)
+        return np.vstack([w[self.n_lead :], np.zeros((min(self.n_lead, w.shape[0]), w.shape[1]))])
 
     def predict(self, X):
         """The regressor's simulation plus the gated response above
