@@ -8,7 +8,7 @@ PNLSS iteration goes, beside the published figures.
         [--max-iter 20] [--n-jobs 1] [--decoupled 3:3 5:5 3:3:18@1 ...]
         [--decoupled-iter 50] [--n-init 2] [--weighting relative|none] [--cpd] [--no-pnlss]
         [--select [--select-states 18] [--select-draws 1 2]] [--above-band]
-        [--output FILE]
+        [--above-band-lead 0 25 50] [--output FILE]
 
 The committed results: ``--decoupled 3:3 3:5 3:3:14 3:3:18 3:3:18@1 3:3:18@2
 --select --select-draws 1 2 --above-band``.
@@ -46,6 +46,14 @@ fitted model, kept as it is; a few seconds). A plain linear map of that
 content (``force_above_band``) spoils level 2, whose force carries content
 there the structure does not answer; the gate, shut at the amplitudes where
 the joint does not knock, leaves it alone.
+
+``--above-band-lead 0 25 50`` adds the same with filters that reach ahead
+in the gated force (``AboveBandRegressor(n_lead=...)``), the lead chosen
+on held-out estimation levels 3 and 5: the force measured at the drive
+point shows an impact later than the payload does. Such a row reads the
+force after the time it predicts (``non_causal``), so it is never the
+best: ``--decoupled 3:3:18 --no-pnlss --above-band --above-band-lead 0 25
+50 --output benchmarks/results/f16_lead.json`` is the committed run.
 
 ``--data-dir`` (default ``../shared/data/f16`` or ``$SKLEARN_PNLSS_F16_DATA``)
 holds the ``F16Data_*.mat`` files. The test multisines are simulated in
@@ -305,25 +313,60 @@ def entry(name, settings, model, test, fit_s, extra=None):
     return row
 
 
-def above_band(row, model, X, y, test):
+def above_band(row, model, X, y, test, leads=()):
     """The row of ``model`` (fitted, kept as it is) with its response above
     the excited band: the force's content there gated by the model's state
     (``AboveBandRegressor``, fitted on the training levels); its fit time
-    is the model's plus its own."""
+    is the model's plus its own.
+
+    With ``leads``, the filters reach ahead by the one of them that predicts
+    the interior estimation levels 3 and 5 best, each held out in turn (the
+    model inside fitted on all four: only the filters are held out). Such a
+    model reads the measured force after the time it predicts: it is marked
+    ``non_causal`` and never taken for the best."""
     from sklearn.frozen import FrozenEstimator
 
     from sklearn_pnlss import AboveBandRegressor
 
+    def wrapped_on(levels, n_lead):
+        return AboveBandRegressor(FrozenEstimator(model), cutoff=BAND_EDGES[1], fs=400.0,
+                                  n_lead=n_lead).fit(X[levels], y[levels])
+
     t0 = time.perf_counter()
-    wrapped = AboveBandRegressor(FrozenEstimator(model), cutoff=BAND_EDGES[1], fs=400.0).fit(X, y)
+    held_out = {}
+    for n_lead in leads:
+        errors = []
+        for held in (TRAIN_LEVELS.index(3), TRAIN_LEVELS.index(5)):
+            others = [i for i in range(len(TRAIN_LEVELS)) if i != held]
+            err = wrapped_on(others, n_lead).predict(X[held]) - y[held]
+            errors.append(np.sqrt(np.mean(err**2, axis=0) / np.mean(y[held] ** 2, axis=0)))
+        held_out[n_lead] = float(np.mean(errors))
+    n_lead = min(held_out, key=held_out.get) if leads else 0
+    wrapped = wrapped_on(list(range(len(TRAIN_LEVELS))), n_lead)
     fit_s = row["fit_s"] + time.perf_counter() - t0
     name = row["model"]["estimator"]
     settings = {"estimator_inside": name, **{k: v for k, v in row["model"].items() if k != "estimator"},
                 "cutoff_hz": wrapped.cutoff, "n_taps": wrapped.n_taps}
+    if leads:
+        settings.update(n_lead=n_lead, non_causal=n_lead > 0)
+        print(f"lead chosen on held-out levels 3 and 5: n_lead {n_lead} (mean NRMSE there: "
+              + ", ".join(f"{k}: {v:.4f}" for k, v in held_out.items()) + ")", flush=True)
     added = wrapped.fir_.size + wrapped.gate_coef_.size
     extra = {"n_params": row["n_params"] + added, "n_nonlinear_params": row["n_nonlinear_params"],
              "n_above_band_params": added, "above_band_explained_train": wrapped.explained_fraction_.tolist()}
-    return entry(f"AboveBandRegressor({name})", settings, wrapped, test, fit_s, extra)
+    if leads:
+        extra["held_out_nrmse_by_lead"] = {str(k): v for k, v in held_out.items()}
+    suffix = f", n_lead={n_lead}" if leads else ""
+    return entry(f"AboveBandRegressor({name}{suffix})", settings, wrapped, test, fit_s, extra)
+
+
+def above_band_rows(args, row, model, X, y, test):
+    """The rows ``--above-band`` and ``--above-band-lead`` add beside
+    ``row``."""
+    rows = [above_band(row, model, X, y, test)] if args.above_band else []
+    if args.above_band_lead:
+        rows.append(above_band(row, model, X, y, test, leads=args.above_band_lead))
+    return rows
 
 
 def fit_pnlss(args, bla, X, y, test):
@@ -419,7 +462,7 @@ def select_decoupled(args, X, y, test):
         model.fit(X, y)
         row = entry(name + (f", random_state={seed}" if seed else ""), {**settings, "random_state": seed},
                     model[-1], test, time.perf_counter() - t0)
-        rows.append([row] + ([above_band(row, model[-1], X, y, test)] if args.above_band else []))
+        rows.append([row] + above_band_rows(args, row, model[-1], X, y, test))
     chosen, draws = rows[0], [row for kept in rows[1:] for row in kept]
     return chosen, draws, {"grid": scores, "search_s": search_s, "selected": {"n_branches": r, "n_knots": knots}}
 
@@ -450,6 +493,9 @@ def main(argv=None):
     parser.add_argument("--above-band", action="store_true",
                         help="also each decoupled model with its response above the excited band "
                              "(AboveBandRegressor: the force's content there gated by the model's state)")
+    parser.add_argument("--above-band-lead", type=int, nargs="*", default=[], metavar="N",
+                        help="also each decoupled model with its response above the band through filters that "
+                             "reach N samples ahead, N chosen among these on held-out levels 3 and 5 (non-causal)")
     parser.add_argument("--output", default=RESULTS / "f16.json")
     args = parser.parse_args(argv)
     args.weighting = None if args.weighting == "none" else args.weighting
@@ -496,7 +542,7 @@ def main(argv=None):
         # the linear start's time counted in the fit
         row = entry(f"DecoupledPNLSSRegressor({ns}, {r}, {d}) random" + (f", random_state={seed}" if seed else ""),
                     dsettings, decoupled, test, time.perf_counter() - t0 + start_s)
-        kept = [row] + ([above_band(row, decoupled, X, y, test)] if args.above_band else [])
+        kept = [row] + above_band_rows(args, row, decoupled, X, y, test)
         if seed:  # another draw of the starts: how far the figure holds, not a candidate for the best
             draws += kept
         else:
@@ -513,7 +559,7 @@ def main(argv=None):
 
     results["models"] = rows
     results["draws"] = draws
-    results["best"] = min(rows, key=lambda r: r["mean_nrmse"])
+    results["best"] = min((r for r in rows if not r["model"].get("non_causal")), key=lambda r: r["mean_nrmse"])
     if decoupled_models:
         row, model = min(decoupled_models, key=lambda rm: rm[0]["mean_nrmse"])
         results["force_above_band"] = {"model": row["model"]["estimator"], **force_above_band(model, X, y, test)}
