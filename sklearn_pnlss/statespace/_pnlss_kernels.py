@@ -48,43 +48,56 @@ def _powers(s, pw):
 
 
 @numba.njit(cache=True, nogil=True)
-def _monomial_tables(exps, n, width):
-    """Where each monomial and each of its state derivatives reads its
-    factors, as flat indices into the powers table ``pw`` (``width``
-    columns): a monomial of degree d holds at most d variables, so it costs
-    a few products, not one per variable (F-16, ten states, degrees 2 and
-    3: 650 derivatives against 2,750 entries of the dense loops, which were
-    40 % of the Jacobian's recursion).
-
-    Returns ``values`` (n_mon, c): the factors of monomial j (padded with
-    index 0, ``pw[0, 0] = 1``); and, one entry per (monomial j, state k)
-    that can be nonzero, ``rows`` j, ``states`` k, ``coefs`` (the exponent)
-    and ``factors`` (n_d, c): d monomial_j / d x_k = coef * prod of pw at
-    factors, the derivative's own power first, the others in increasing
-    order (the products of the dense loops, without their unit factors).
-    """
-    n_mon, n_vars = exps.shape
-    c, n_d = 1, 0
-    for j in range(n_mon):
+def _most_variables(exps):
+    """The most variables one monomial holds (at least 1)."""
+    c = 1
+    for j in range(exps.shape[0]):
         held = 0
-        for v in range(n_vars):
+        for v in range(exps.shape[1]):
             if exps[j, v] > 0:
                 held += 1
-                if v < n:
-                    n_d += 1
         c = max(c, held)
-    values = np.zeros((n_mon, c), dtype=np.int64)
-    rows = np.empty(n_d, dtype=np.int64)
-    states = np.empty(n_d, dtype=np.int64)
-    coefs = np.empty(n_d)
-    factors = np.zeros((n_d, c), dtype=np.int64)
-    r = 0
-    for j in range(n_mon):
+    return c
+
+
+@numba.njit(cache=True, nogil=True)
+def _value_factors(exps, width):
+    """Where each monomial reads its factors, as flat indices into the
+    powers table ``pw`` (``width`` columns), padded with index 0 (``pw[0, 0]
+    = 1``): a monomial of degree d holds at most d variables, so it costs a
+    few products, not one per variable."""
+    values = np.zeros((exps.shape[0], _most_variables(exps)), dtype=np.int64)
+    for j in range(exps.shape[0]):
         a = 0
-        for v in range(n_vars):
+        for v in range(exps.shape[1]):
             if exps[j, v] > 0:
                 values[j, a] = v * width + exps[j, v]
                 a += 1
+    return values
+
+
+@numba.njit(cache=True, nogil=True)
+def _derivative_factors(exps, n, width):
+    """The state derivatives of the monomials that can be nonzero, one
+    entry per (monomial j, state k): ``rows`` j, ``states`` k, ``coefs``
+    (the exponent) and ``factors`` (flat indices into ``pw``, padded with
+    index 0): d monomial_j / d x_k = coef * prod of pw at factors, the
+    derivative's own power first, the others in increasing order (the
+    products of dense loops, without their unit factors). F-16, ten states,
+    degrees 2 and 3: 650 entries against 2,750 of the dense loops, which
+    were 38 % of the Jacobian's recursion."""
+    n_mon, n_vars = exps.shape
+    n_d = 0
+    for j in range(n_mon):
+        for k in range(min(n, n_vars)):
+            if exps[j, k] > 0:
+                n_d += 1
+    rows = np.empty(n_d, dtype=np.int64)
+    states = np.empty(n_d, dtype=np.int64)
+    coefs = np.empty(n_d)
+    factors = np.zeros((n_d, _most_variables(exps)), dtype=np.int64)
+    r = 0
+    for j in range(n_mon):
         for k in range(min(n, n_vars)):
             e = exps[j, k]
             if e == 0:
@@ -97,12 +110,12 @@ def _monomial_tables(exps, n, width):
                     factors[r, b] = v * width + exps[j, v]
                     b += 1
             r += 1
-    return values, rows, states, coefs, factors
+    return rows, states, coefs, factors
 
 
 @_jit
 def _monomial_values(values, pwf, out):
-    """The monomials from the flat powers table (see _monomial_tables)."""
+    """The monomials from the flat powers table (see _value_factors)."""
     for j in range(values.shape[0]):
         val = 1.0
         for a in range(values.shape[1]):
@@ -111,13 +124,13 @@ def _monomial_values(values, pwf, out):
 
 
 @_jit
-def _linearised(L, Wt, tables, pwf, inside, work, out):
+def _linearised(L, Wt, derivatives, pwf, inside, work, out):
     """out = L + W dmon/dx: the local linear map of x (A + E dzeta/dx, or
     C + F deta/dx), each derivative of the monomials formed where it is
-    used (see _monomial_tables); none through a state held at its edge.
+    used (see _derivative_factors); none through a state held at its edge.
     ``Wt`` is W transposed and ``work`` (n, rows of L) a scratch array: the
     sum runs along W's columns, contiguous there."""
-    _, rows, states, coefs, factors = tables
+    rows, states, coefs, factors = derivatives
     n, n_out = L.shape[1], L.shape[0]
     work[:, :] = 0.0
     for r in range(rows.shape[0]):
@@ -211,8 +224,8 @@ def pnlss_simulate(A, B, C, D, E, F, exE, exF, lo, hi, U, x0):
     inside = np.empty(n + m, dtype=np.bool_)
     zeta = np.empty(exE.shape[0])
     eta = np.empty(exF.shape[0])
-    valE = _monomial_tables(exE, n, pw.shape[1])[0]
-    valF = _monomial_tables(exF, n, pw.shape[1])[0]
+    valE = _value_factors(exE, pw.shape[1])
+    valF = _value_factors(exF, pw.shape[1])
     Y = np.empty((N, p))
     X = np.empty((N, n))
     x = x0.copy()
@@ -284,8 +297,8 @@ def pnlss_jacobian(A, B, C, D, E, F, exE, exF, lo, hi, U, x, x_end, Sx, n_skip, 
     inside = np.empty(n + m, dtype=np.bool_)
     zeta = np.empty(nE)
     eta = np.empty(nF)
-    tabE = _monomial_tables(exE, n, pw.shape[1])
-    tabF = _monomial_tables(exF, n, pw.shape[1])
+    valE, derE = _value_factors(exE, pw.shape[1]), _derivative_factors(exE, n, pw.shape[1])
+    valF, derF = _value_factors(exF, pw.shape[1]), _derivative_factors(exF, n, pw.shape[1])
     # The state's and the output's local linear maps stacked, M = [Ax; Cx],
     # so one product M S carries the sensitivities to the next state and to
     # the output (S read once per sample). Two work arrays, swapped every
@@ -305,12 +318,12 @@ def pnlss_jacobian(A, B, C, D, E, F, exE, exF, lo, hi, U, x, x_end, Sx, n_skip, 
         _stack(x_now, u, s)
         _hold(s, lo, hi, inside)
         _powers(s, pw)
-        _monomial_values(tabE[0], pwf, zeta)
-        _linearised(A, Et, tabE, pwf, inside, work, Ax)
+        _monomial_values(valE, pwf, zeta)
+        _linearised(A, Et, derE, pwf, inside, work, Ax)
         S = P[:n]
         if t >= n_skip:
-            _monomial_values(tabF[0], pwf, eta)
-            _linearised(C, Ft, tabF, pwf, inside, work, Cx)
+            _monomial_values(valF, pwf, eta)
+            _linearised(C, Ft, derF, pwf, inside, work, Cx)
             _carry(M, S, P_next)
             Jt = J[t - n_skip]
             for a in range(p):
