@@ -6,7 +6,8 @@ PNLSS iteration goes, beside the published figures.
 
     python benchmarks/bench_f16.py [--data-dir DIR] [--states 10]
         [--max-iter 20] [--n-jobs 1] [--decoupled 3:3 5:5 3:3:18@1 ...]
-        [--decoupled-iter 50] [--n-init 2] [--weighting relative|none] [--cpd] [--no-pnlss]
+        [--decoupled-iter 50] [--n-init 2] [--weighting relative|none]
+        [--also-weighting noise ...] [--cpd] [--no-pnlss]
         [--select [--select-states 18] [--select-draws 1 2]] [--above-band]
         [--above-band-lead 0 25 50] [--output FILE]
 
@@ -23,6 +24,11 @@ refitted on all four levels (``selection`` in the results).
 The nonlinear fits weigh each level's error relative to its own output
 power (``weighting="relative"``), as the NRMSE scores the levels;
 ``--weighting none`` fits the plain sum, which the largest level decides.
+``--also-weighting noise`` fits each decoupled model again with each
+level's DFT bins weighted by the inverse of its own noise variance (the
+maximum-likelihood weighting), recorded under ``weightings``:
+``--decoupled 3:3:18 --no-pnlss --also-weighting noise --output
+benchmarks/results/f16_weighting.json`` is the committed run.
 
 The decoupled models (``--decoupled branches:degree[:states]``) start
 from the linear model of their state count (``init="random"``, no full
@@ -183,6 +189,11 @@ def load(data_dir):
     return X, y, test
 
 
+def nrmse_of(prediction, y):
+    """NRMSE per output of ``prediction`` against ``y`` (samples, outputs)."""
+    return np.sqrt(np.mean((prediction - y) ** 2, axis=0) / np.mean(y**2, axis=0))
+
+
 def nrmse(model, test):
     """{level: [per output]} and the mean over levels and outputs, on the
     eight steady-state periods of each test record (simulated in periodic
@@ -193,8 +204,7 @@ def nrmse(model, test):
     per_level, by_band = {}, {}
     for lv, d in test.items():
         pred = model.predict(d.X)
-        err = pred - d.y
-        per_level[str(lv)] = (np.sqrt(np.mean(err**2, axis=(0, 1)) / np.mean(d.y**2, axis=(0, 1)))).tolist()
+        per_level[str(lv)] = nrmse_of(pred[0], d.y[0]).tolist()
         by_band[str(lv)] = nrmse_by_band(d.y, pred, fs=400.0, edges=BAND_EDGES).tolist()
     return per_level, float(np.mean([v for row in per_level.values() for v in row])), by_band
 
@@ -338,8 +348,7 @@ def above_band(row, model, X, y, test, leads=()):
         errors = []
         for held in (TRAIN_LEVELS.index(3), TRAIN_LEVELS.index(5)):
             others = [i for i in range(len(TRAIN_LEVELS)) if i != held]
-            err = wrapped_on(others, n_lead).predict(X[held]) - y[held]
-            errors.append(np.sqrt(np.mean(err**2, axis=0) / np.mean(y[held] ** 2, axis=0)))
+            errors.append(nrmse_of(wrapped_on(others, n_lead).predict(X[held]), y[held]))
         held_out[n_lead] = float(np.mean(errors))
     n_lead = min(held_out, key=held_out.get) if leads else 0
     wrapped = wrapped_on(list(range(len(TRAIN_LEVELS))), n_lead)
@@ -482,6 +491,9 @@ def main(argv=None):
     parser.add_argument("--weighting", choices=["relative", "none"], default="relative",
                         help="of the nonlinear fits' simulation error: each level's relative to its own output "
                              "power, as NRMSE scores the levels (default), or none (the largest level dominates)")
+    parser.add_argument("--also-weighting", nargs="*", default=[], choices=["relative", "none", "noise"],
+                        help="also each decoupled model fitted with these weightings (noise: each level's DFT "
+                             "bins by the inverse of its own noise variance), recorded under weightings")
     parser.add_argument("--cpd", action="store_true", help="also the decoupled model started from the PNLSS one")
     parser.add_argument("--no-pnlss", action="store_true", help="skip the full PNLSS model (and --cpd)")
     parser.add_argument("--select", action="store_true",
@@ -499,6 +511,7 @@ def main(argv=None):
     parser.add_argument("--output", default=RESULTS / "f16.json")
     args = parser.parse_args(argv)
     args.weighting = None if args.weighting == "none" else args.weighting
+    args.also_weighting = [None if w == "none" else w for w in args.also_weighting]
 
     from sklearn_pnlss import BLAEstimator, DecoupledPNLSSRegressor
 
@@ -523,25 +536,35 @@ def main(argv=None):
     rows.append(entry(f"BLAEstimator({n})", {"n_states": n}, bla, test, bla_s))
 
     linear = {n: (bla, bla_s)}  # the linear start of each state count and its fit time
-    decoupled_models, draws = [], []  # (row, model) of the decoupled models; the rows of other draws
-    for spec in args.decoupled:
-        spec, _, seed = spec.partition("@")
-        r, d, *states = (int(v) for v in spec.split(":"))
-        ns, seed = (states[0] if states else n), int(seed or 0)
+
+    def fit_decoupled(r, d, ns, seed, weighting):
+        """The row and the model of one decoupled fit from the linear start
+        of ``ns`` states (its time counted in the fit)."""
         dsettings = {"n_states": ns, "n_branches": r, "degree": d, "init": "random", "n_init": args.n_init,
-                     "max_iter": args.decoupled_iter, "weighting": args.weighting, "random_state": seed}
+                     "max_iter": args.decoupled_iter, "weighting": weighting, "random_state": seed}
         decoupled = DecoupledPNLSSRegressor(ns, n_branches=r, degree=d, init="random", n_init=args.n_init,
                                             max_iter=args.decoupled_iter, period=8192, n_jobs=2,
-                                            weighting=args.weighting, random_state=seed)
+                                            weighting=weighting, random_state=seed)
         if ns not in linear:
             t0 = time.perf_counter()
             linear[ns] = BLAEstimator(ns, period=8192, fs=400.0).fit(X, y), time.perf_counter() - t0
         start, start_s = linear[ns]
         t0 = time.perf_counter()
         decoupled.fit(start.transform(X), y)
-        # the linear start's time counted in the fit
-        row = entry(f"DecoupledPNLSSRegressor({ns}, {r}, {d}) random" + (f", random_state={seed}" if seed else ""),
-                    dsettings, decoupled, test, time.perf_counter() - t0 + start_s)
+        name = (f"DecoupledPNLSSRegressor({ns}, {r}, {d}) random" + (f", random_state={seed}" if seed else "")
+                + ("" if weighting == args.weighting else f", weighting={weighting}"))
+        fit_s = time.perf_counter() - t0 + start_s
+        train = {str(lv): nrmse_of(decoupled.predict(X[i]), y[i]).tolist() for i, lv in enumerate(TRAIN_LEVELS)}
+        return entry(name, dsettings, decoupled, test, fit_s, {"train_nrmse": train}), decoupled
+
+    decoupled_models, draws = [], []  # (row, model) of the decoupled models; the rows of other draws
+    weightings = []  # the rows of the decoupled models fitted with --also-weighting
+    for spec in args.decoupled:
+        spec, _, seed = spec.partition("@")
+        r, d, *states = (int(v) for v in spec.split(":"))
+        ns, seed = (states[0] if states else n), int(seed or 0)
+        row, decoupled = fit_decoupled(r, d, ns, seed, args.weighting)
+        weightings += [fit_decoupled(r, d, ns, seed, w)[0] for w in args.also_weighting]
         kept = [row] + above_band_rows(args, row, decoupled, X, y, test)
         if seed:  # another draw of the starts: how far the figure holds, not a candidate for the best
             draws += kept
@@ -559,6 +582,8 @@ def main(argv=None):
 
     results["models"] = rows
     results["draws"] = draws
+    if weightings:
+        results["weightings"] = weightings
     results["best"] = min((r for r in rows if not r["model"].get("non_causal")), key=lambda r: r["mean_nrmse"])
     if decoupled_models:
         row, model = min(decoupled_models, key=lambda rm: rm[0]["mean_nrmse"])

@@ -22,7 +22,7 @@ import pytest
 import scipy.signal as ss
 
 from sklearn_pnlss.frequency.bla import excited_lines, periodic_bla, welch_bla
-from sklearn_pnlss.frequency.noise import periodic_noise_variance
+from sklearn_pnlss.frequency.noise import periodic_noise_variance, signal_noise_variances
 
 N = 256  # samples per period
 # A resonator: poles 0.9 exp(+-0.6j), near bin 0.6 / (2 pi) * 256 = 24.4.
@@ -359,6 +359,28 @@ def test_periodic_noise_variance_agrees_with_bla_noise_level(noisy_linear):
     var = periodic_noise_variance(list(Y), N)
     res = periodic_bla(split(X), split(Y))
     np.testing.assert_allclose(var * N / P_NOISE, res.noise_level, rtol=1e-10)
+
+
+def test_each_signal_keeps_its_own_noise():
+    """Two levels of a campaign with noise std 0.01 and 0.1: each signal's
+    estimate is its own (pooled, the quiet one would read 0.5 of the loud
+    one's variance, 50 times its own). Smoothed to 64 real degrees of
+    freedom: 5 periods (8 per bin) over 8 bins, so across 129 bins the
+    mean is within a few percent and no bin is off by a factor 2 (64 dof:
+    relative std 0.18). A signal of one period gets the pooled variance."""
+    rng = np.random.default_rng(11)
+    x = multisine(np.arange(1, 60), 1, 5, rng)[0, :, 0]
+    clean = steady_state(x)
+    quiet = (clean + 0.01 * rng.standard_normal(clean.size))[:, None]
+    loud = (10 * clean + 0.1 * rng.standard_normal(clean.size))[:, None]
+    single = loud[:N]
+    own = signal_noise_variances([quiet, loud, single], N)
+    for var, s in zip(own[:2], (0.01, 0.1)):
+        assert var.shape == (N // 2 + 1, 1)
+        assert np.mean(var) / s**2 == pytest.approx(1.0, abs=0.1)
+        assert np.all((var > 0.5 * s**2) & (var < 2 * s**2))
+    np.testing.assert_array_equal(own[2], periodic_noise_variance([quiet, loud, single], N))
+    assert signal_noise_variances([single], N) is None
 
 
 def test_trend_removal_keeps_drift_out_of_the_noise():

@@ -151,7 +151,7 @@ def test_averaged_segment_layout_and_freq_weight():
     Y = rng.standard_normal((P * period, 1))
     calls = []
 
-    def freq_weight(n_averaged):
+    def freq_weight(i, n_averaged):
         calls.append(n_averaged)
         return np.full((period // 2 + 1, 1), float(n_averaged))
 

@@ -77,10 +77,14 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         domain, uniform weight on the DFT bins of ``band``. "noise":
         frequency domain, each bin of ``band`` weighted by the inverse noise
         variance of the output, estimated from the spread over the periods
-        (needs periodic signals with at least two periods; with ``m`` outputs
-        the weight is per output, cross-covariances are ignored); the fit
-        then runs twice, unweighted and then weighted from that result,
-        because the weighted cost stalls when started from the linear model.
+        of each training signal on its own (smoothed over neighbouring bins;
+        a signal of one period takes the variance pooled over the others),
+        so that the levels of a campaign each count by their own noise
+        (needs periodic signals with at least two periods; with ``m``
+        outputs the weight is per output, cross-covariances are ignored);
+        the fit then runs twice, first in time with each signal relative to
+        its power ("relative") and then weighted from that result, because
+        the weighted cost stalls when started from the linear model.
         Both frequency weightings need periodic training signals.
     band : tuple of two int or None, default=None
         First and last DFT bin (of one period) of the weighted band; bin

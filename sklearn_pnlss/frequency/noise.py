@@ -1,9 +1,16 @@
 """Output noise level per DFT bin from steady-state periodic measurements."""
 import numpy as np
+from scipy.ndimage import uniform_filter1d
 
 from ..utils.validation import is_periodic
 
-__all__ = ["periodic_noise_variance"]
+__all__ = ["periodic_noise_variance", "signal_noise_variances"]
+
+# Real degrees of freedom each bin's estimate of one signal's noise
+# variance is smoothed to (over neighbouring bins): a weight is the inverse
+# of the estimate, and one from two periods alone (2 degrees of freedom) is
+# infinite in expectation.
+SIGNAL_NOISE_DOF = 64
 
 
 def periodic_noise_variance(y_list, period, trend_degree=0):
@@ -44,3 +51,42 @@ def periodic_noise_variance(y_list, period, trend_degree=0):
         total = total + np.sum(np.abs(residual) ** 2, axis=0)
         dof += P - 1 - degree
     return None if dof == 0 else total / dof
+
+
+def signal_noise_variances(y_list, period, min_dof=SIGNAL_NOISE_DOF):
+    """Each signal's own noise variance per bin of one period's unitary
+    DFT, from the spread over its own periods, smoothed over neighbouring
+    bins to ``min_dof`` real degrees of freedom.
+
+    The records of a test campaign at several levels have noise of their
+    own (on a structure with a joint that knocks, the knocks that do not
+    repeat grow with the level): pooled, the loudest level's noise would
+    weigh the quiet ones. A signal with fewer than two periods gets the
+    variance pooled over the others (:func:`periodic_noise_variance`).
+
+    Parameters
+    ----------
+    y_list : list of ndarray (n_samples_i, p)
+    period : int
+    min_dof : int, default=SIGNAL_NOISE_DOF
+        A signal of ``P`` periods has ``2 (P - 1)`` real degrees of freedom
+        per bin; the estimate is averaged over ``ceil(min_dof / (2 (P - 1)))``
+        neighbouring bins.
+
+    Returns
+    -------
+    list of ndarray of shape (period // 2 + 1, p), or None when no signal has
+        two periods or more.
+    """
+    pooled = periodic_noise_variance(y_list, period)
+    if pooled is None:
+        return None
+    out = []
+    for Y in y_list:
+        own = periodic_noise_variance([Y], period)
+        if own is None:
+            out.append(pooled)
+            continue
+        width = -(-min_dof // (2 * (Y.shape[0] // period - 1)))
+        out.append(uniform_filter1d(own, size=width, axis=0, mode="nearest") if width > 1 else own)
+    return out

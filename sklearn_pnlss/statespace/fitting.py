@@ -20,7 +20,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..frequency.noise import periodic_noise_variance
+from ..frequency.noise import signal_noise_variances
 from ..metrics import to_db
 from ..utils.validation import is_periodic
 from .levenberg_marquardt import levenberg_marquardt
@@ -130,7 +130,7 @@ def simulation_objectives(start, X_list, y_list, settings, time_weights=None):
         n_tr, window = int(settings.n_transient), 0
     freq_weight = frequency_weight(Xn, yn, settings)
 
-    def objective(freq_weight):
+    def objective(time_weights, freq_weight):
         return SimulationError(make_segments(
             Xn, yn, period=period, n_transient=n_tr if period else 0,
             n_skip=0 if settings.n_transient == "auto" else int(settings.n_transient),
@@ -141,10 +141,14 @@ def simulation_objectives(start, X_list, y_list, settings, time_weights=None):
     # The noise-weighted cost, dominated by the quietest bins, has poor
     # basins far from its optimum: from the linear start, LM stalls well
     # above it (measured in tests/test_pnlss_fitting.py). Starting it from
-    # the unweighted optimum reaches it.
-    stages = [objective(None)] if settings.weighting != "band" else []
+    # the time-domain optimum reaches it; with each signal's error relative
+    # to its power there, records of several levels count alike in it, as
+    # each counts by its own noise in the weighted cost.
+    if settings.weighting == "noise":
+        time_weights = relative_weights(y_list)
+    stages = [objective(time_weights, None)] if settings.weighting != "band" else []
     if freq_weight is not None:
-        stages.append(objective(freq_weight))
+        stages.append(objective(None, freq_weight))
     return stages
 
 
@@ -178,8 +182,10 @@ def relative_weights(y_list, time_weights=None):
 
 
 def frequency_weight(Xn, yn, settings):
-    """Callable giving the weight per DFT bin of a periodic segment that
-    averages ``n_averaged`` periods, or None (time domain)."""
+    """Callable ``(i, n_averaged)`` giving the weight per DFT bin of the
+    periodic segment of signal ``i`` that averages ``n_averaged`` periods,
+    or None (time domain). ``weighting="noise"``: each signal's own inverse
+    noise variance (:func:`~sklearn_pnlss.frequency.noise.signal_noise_variances`)."""
     weighting, period, band = settings.weighting, settings.period, settings.band
     if weighting in TIME_DOMAIN_WEIGHTINGS:
         return None
@@ -198,16 +204,17 @@ def frequency_weight(Xn, yn, settings):
     in_band = np.zeros((n_bins, 1))
     in_band[lo : hi + 1] = 1.0
     if weighting == "band":
-        return lambda n_averaged: np.repeat(in_band, yn[0].shape[1], axis=1)
-    var = periodic_noise_variance(yn, period)
-    if var is None:
+        return lambda i, n_averaged: np.repeat(in_band, yn[0].shape[1], axis=1)
+    variances = signal_noise_variances(yn, period)
+    if variances is None:
         raise ValueError(
             "weighting='noise' estimates the noise from the spread over periods: pass "
             "periodic signals with at least two periods, or use weighting='band'."
         )
     # A noiseless bin (simulated data) would get an infinite weight.
-    var = np.maximum(var, 1e-12 * np.mean(var[lo : hi + 1]) + np.finfo(float).tiny)
-    return lambda n_averaged: in_band * n_averaged / var
+    floor = 1e-12 * np.mean([np.mean(v[lo : hi + 1]) for v in variances]) + np.finfo(float).tiny
+    weights = [in_band / np.maximum(v, floor) for v in variances]
+    return lambda i, n_averaged: weights[i] * n_averaged
 
 
 def trusted_model(model, segments, settings, objective=None):

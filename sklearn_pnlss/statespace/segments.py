@@ -70,9 +70,10 @@ def make_segments(
         Average periodic signals over their periods first.
     time_weights : list of ndarray or None
         Per-sample weights, broadcastable to each ``y``.
-    freq_weight : callable (n_averaged) -> ndarray or None
-        Weights per DFT bin of one period for a periodic segment whose
-        periods are each the mean of ``n_averaged`` measured periods.
+    freq_weight : callable (i, n_averaged) -> ndarray or None
+        Weights per DFT bin of one period for the periodic segment of
+        signal ``i`` whose periods are each the mean of ``n_averaged``
+        measured periods.
     """
     segs = []
     for i, (U, Y) in enumerate(zip(X_list, y_list)):
@@ -91,7 +92,7 @@ def make_segments(
             n_averaged = U.shape[0] // period
             U, Y, W = average_periods(U, Y, period, W)
         n_tr = min(n_transient, U.shape[0])
-        fw = None if freq_weight is None else freq_weight(n_averaged)
+        fw = None if freq_weight is None else freq_weight(i, n_averaged)
         segs.append(Segment(
             np.vstack([U[U.shape[0] - n_tr :], U]), Y, n_tr,
             time_weight=None if W is None else np.ascontiguousarray(W),
