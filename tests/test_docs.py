@@ -1017,11 +1017,14 @@ FIGURES = [
     Figure(R, "excited 2-15 Hz band", F16, lambda: [2, 15]),
     Figure(R, "18-state model reaches level 2 at 0.080 / 0.071 / 0.070 (relative: 0.081 / 0.091 / 0.101), but "
               "level 5 is fitted to 0.240 / 0.230 / 0.376 (relative: 0.194 / 0.124 / 0.295) and the mean over the "
-              "test levels is 0.207 against 0.171, in 708 s against 322 s", WEIGHTING,
+              "test levels is 0.207 against 0.171 (the table's 0.179 for the same settings came from another machine: "
+              "the 18-state fits move with rounding), in 708 s against 322 s", WEIGHTING,
            lambda: [_f16_weighted("noise")["model"]["n_states"], 2, *_f16_weighted("noise")["nrmse"]["2"],
                     *_f16_weighted("relative")["nrmse"]["2"], 5, *_f16_weighted("noise")["train_nrmse"]["5"],
                     *_f16_weighted("relative")["train_nrmse"]["5"], _f16_weighted("noise")["mean_nrmse"],
-                    _f16_weighted("relative")["mean_nrmse"], _f16_weighted("noise")["fit_s"],
+                    _f16_weighted("relative")["mean_nrmse"],
+                    _f16_model("DecoupledPNLSSRegressor(18, 3, 3) random")["mean_nrmse"], 18,
+                    _f16_weighted("noise")["fit_s"],
                     _f16_weighted("relative")["fit_s"]]),
     Figure(PN, "smoothed over neighbouring bins to 64 degrees of freedom", "sklearn_pnlss/frequency/noise.py",
            lambda: [__import__("sklearn_pnlss.frequency.noise", fromlist=["x"]).SIGNAL_NOISE_DOF]),
