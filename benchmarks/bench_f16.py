@@ -7,7 +7,7 @@ PNLSS iteration goes, beside the published figures.
     python benchmarks/bench_f16.py [--data-dir DIR] [--states 10]
         [--max-iter 20] [--n-jobs 1] [--decoupled 3:3 5:5 3:3:18@1 ...]
         [--decoupled-iter 50] [--n-init 2] [--weighting relative|none]
-        [--also-weighting noise ...] [--cpd] [--no-pnlss]
+        [--also-weighting noise ...] [--also-sweeps] [--cpd] [--no-pnlss]
         [--select [--select-states 18] [--select-draws 1 2]] [--above-band]
         [--above-band-lead 0 25 50] [--output FILE]
 
@@ -29,6 +29,11 @@ level's DFT bins weighted by the inverse of its own noise variance (the
 maximum-likelihood weighting), recorded under ``weightings``:
 ``--decoupled 3:3:18 --no-pnlss --also-weighting noise --output
 benchmarks/results/f16_weighting.json`` is the committed run.
+``--also-sweeps`` fits each decoupled model again on the estimation
+levels' sine sweeps too (simulated from rest beside the period-averaged
+multisines), recorded under ``with_sweeps``: ``--decoupled 3:3 --no-pnlss
+--also-sweeps --output benchmarks/results/f16_sweeps.json`` is the
+committed run.
 
 The decoupled models (``--decoupled branches:degree[:states]``) start
 from the linear model of their state count (``init="random"``, no full
@@ -494,6 +499,9 @@ def main(argv=None):
     parser.add_argument("--also-weighting", nargs="*", default=[], choices=["relative", "none", "noise"],
                         help="also each decoupled model fitted with these weightings (noise: each level's DFT "
                              "bins by the inverse of its own noise variance), recorded under weightings")
+    parser.add_argument("--also-sweeps", action="store_true",
+                        help="also each decoupled model trained on the estimation levels' sine sweeps too (from "
+                             "rest, beside the multisines), recorded under with_sweeps")
     parser.add_argument("--cpd", action="store_true", help="also the decoupled model started from the PNLSS one")
     parser.add_argument("--no-pnlss", action="store_true", help="skip the full PNLSS model (and --cpd)")
     parser.add_argument("--select", action="store_true",
@@ -514,6 +522,7 @@ def main(argv=None):
     args.also_weighting = [None if w == "none" else w for w in args.also_weighting]
 
     from sklearn_pnlss import BLAEstimator, DecoupledPNLSSRegressor
+    from sklearn_pnlss.datasets import load_f16
 
     X, y, test = load(args.data_dir)
     n = args.states
@@ -537,9 +546,10 @@ def main(argv=None):
 
     linear = {n: (bla, bla_s)}  # the linear start of each state count and its fit time
 
-    def fit_decoupled(r, d, ns, seed, weighting):
+    def fit_decoupled(r, d, ns, seed, weighting, sweeps=False):
         """The row and the model of one decoupled fit from the linear start
-        of ``ns`` states (its time counted in the fit)."""
+        of ``ns`` states (its time counted in the fit); ``sweeps``: the
+        estimation levels' sine sweeps (from rest) trained on too."""
         dsettings = {"n_states": ns, "n_branches": r, "degree": d, "init": "random", "n_init": args.n_init,
                      "max_iter": args.decoupled_iter, "weighting": weighting, "random_state": seed}
         decoupled = DecoupledPNLSSRegressor(ns, n_branches=r, degree=d, init="random", n_init=args.n_init,
@@ -550,21 +560,30 @@ def main(argv=None):
             linear[ns] = BLAEstimator(ns, period=8192, fs=400.0).fit(X, y), time.perf_counter() - t0
         start, start_s = linear[ns]
         t0 = time.perf_counter()
-        decoupled.fit(start.transform(X), y)
+        X_fit, y_fit = (list(X) + [d.X[0] for d in train_sweeps], list(y) + [d.y[0] for d in train_sweeps]) \
+            if sweeps else (X, y)
+        decoupled.fit(start.transform(X_fit), y_fit)
         name = (f"DecoupledPNLSSRegressor({ns}, {r}, {d}) random" + (f", random_state={seed}" if seed else "")
-                + ("" if weighting == args.weighting else f", weighting={weighting}"))
+                + ("" if weighting == args.weighting else f", weighting={weighting}")
+                + (", with the sweeps" if sweeps else ""))
+        dsettings["train_sweeps"] = sweeps
         fit_s = time.perf_counter() - t0 + start_s
         train = {str(lv): nrmse_of(decoupled.predict(X[i]), y[i]).tolist() for i, lv in enumerate(TRAIN_LEVELS)}
         return entry(name, dsettings, decoupled, test, fit_s, {"train_nrmse": train}), decoupled
 
     decoupled_models, draws = [], []  # (row, model) of the decoupled models; the rows of other draws
     weightings = []  # the rows of the decoupled models fitted with --also-weighting
+    with_sweeps = []  # and with --also-sweeps
+    train_sweeps = [load_f16(args.data_dir, level=lv, kind="sinesweep", validation_level=None)
+                    for lv in TRAIN_LEVELS] if args.also_sweeps else []
     for spec in args.decoupled:
         spec, _, seed = spec.partition("@")
         r, d, *states = (int(v) for v in spec.split(":"))
         ns, seed = (states[0] if states else n), int(seed or 0)
         row, decoupled = fit_decoupled(r, d, ns, seed, args.weighting)
         weightings += [fit_decoupled(r, d, ns, seed, w)[0] for w in args.also_weighting]
+        if args.also_sweeps:
+            with_sweeps.append(fit_decoupled(r, d, ns, seed, args.weighting, sweeps=True)[0])
         kept = [row] + above_band_rows(args, row, decoupled, X, y, test)
         if seed:  # another draw of the starts: how far the figure holds, not a candidate for the best
             draws += kept
@@ -584,6 +603,8 @@ def main(argv=None):
     results["draws"] = draws
     if weightings:
         results["weightings"] = weightings
+    if with_sweeps:
+        results["with_sweeps"] = with_sweeps
     results["best"] = min((r for r in rows if not r["model"].get("non_causal")), key=lambda r: r["mean_nrmse"])
     if decoupled_models:
         row, model = min(decoupled_models, key=lambda rm: rm[0]["mean_nrmse"])
