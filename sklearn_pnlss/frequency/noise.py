@@ -78,15 +78,16 @@ def signal_noise_variances(y_list, period, min_dof=SIGNAL_NOISE_DOF):
     list of ndarray of shape (period // 2 + 1, p), or None when no signal has
         two periods or more.
     """
-    pooled = periodic_noise_variance(y_list, period)
-    if pooled is None:
-        return None
     out = []
     for Y in y_list:
         own = periodic_noise_variance([Y], period)
-        if own is None:
-            out.append(pooled)
-            continue
-        width = -(-min_dof // (2 * (Y.shape[0] // period - 1)))
-        out.append(uniform_filter1d(own, size=width, axis=0, mode="nearest") if width > 1 else own)
+        if own is not None:
+            width = -(-min_dof // (2 * (Y.shape[0] // period - 1)))
+            own = uniform_filter1d(own, size=width, axis=0, mode="nearest") if width > 1 else own
+        out.append(own)
+    if all(v is None for v in out):
+        return None
+    if any(v is None for v in out):  # only then are the periods of every signal read again
+        pooled = periodic_noise_variance(y_list, period)
+        out = [pooled if v is None else v for v in out]
     return out
