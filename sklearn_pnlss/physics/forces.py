@@ -429,6 +429,16 @@ class CustomForce(ForceElement):
     name : str, default="custom"
         Name shown in reports.
 
+    Notes
+    -----
+    The first simulation with a new ``function`` compiles the integrator
+    again around it, once per function object and process (the built-in
+    elements' integrator comes from numba's disk cache, where a user's
+    function, new in every process, cannot be kept): that first call takes
+    far longer than a simulation, the later ones run at the built-in
+    elements' speed. Define the function once, at
+    module level, and reuse it (``with_params`` keeps it).
+
     Examples
     --------
     >>> import numpy as np
