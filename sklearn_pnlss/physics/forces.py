@@ -436,8 +436,8 @@ class CustomForce(ForceElement):
     elements' integrator comes from numba's disk cache, where a user's
     function, new in every process, cannot be kept): that first call takes
     far longer than a simulation, the later ones run at the built-in
-    elements' speed. Define the function once, at
-    module level, and reuse it (``with_params`` keeps it).
+    elements' speed. Define the function once, at module level, and reuse
+    it (``with_params`` keeps it).
 
     Examples
     --------
