@@ -1055,8 +1055,8 @@ FIGURES = [
     Figure(R, "causal FIRs of 200 taps fitted on the estimation levels, the in-band part taken exact from the "
               "measurement): nothing above the band leaves 0.133 in the mean", ROUTES,
            lambda: [_results("f16_above_band_routes")["n_taps"], _route("nothing above the band")["mean_nrmse"]]),
-    Figure(R, "the force gated by the measured envelope of the response there (the gate the response itself gives) 0.112, "
-              "the payload on level 6 still at 0.301", ROUTES,
+    Figure(R, "the force gated by the measured envelope of the response there 0.112, the payload on level 6 "
+              "still at 0.301", ROUTES,
            lambda: [_route(GATED)["mean_nrmse"], 6, _route(GATED)["nrmse"]["6"][2]]),
     Figure(R, "each pair's displacement and velocity) 0.176, worse than nothing", ROUTES,
            lambda: [_route("in-band motion")["mean_nrmse"]]),
