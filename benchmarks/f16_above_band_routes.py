@@ -45,7 +45,8 @@ N_TAPS, ALPHA = 200, 1e-4
 ENVELOPE_WINDOW = 50  # samples (125 ms) over which the gate's envelope is averaged
 CLEARANCES = (0.5, 1.0, 1.5, 2.0)  # hinge knees, in rms of the highest estimation level's motion
 PLACES = [(0, None), (1, None), (2, None), (2, 1), (2, 0), (1, 0)]  # sensor, or sensor pair (drive, wing, payload)
-ROUTES = ("force", "force, gated by the response's envelope", "in-band motion")
+FORCE, GATED, MOTION = "force", "force, gated by the response's envelope", "in-band motion"
+ROUTES = (FORCE, GATED, MOTION)
 
 
 def averaged_period(signal):
@@ -90,9 +91,9 @@ def motion_features(acceleration, reference):
 def route_inputs(route, force, output, scale, reference):
     """The FIR inputs of ``route`` along one averaged period."""
     force_above = above_cutoff(force, CUTOFF, FS)
-    if route == "force":
+    if route == FORCE:
         return force_above
-    if route == ROUTES[1]:
+    if route == GATED:
         return force_above * envelope(above_cutoff(output, CUTOFF, FS), scale, ENVELOPE_WINDOW, True)[:, None]
     return motion_features(output, reference)
 
