@@ -279,12 +279,15 @@ def test_custom_force_must_be_compiled():
         CustomForce(lambda p, y, yd: (0.0, 0.0, 0.0))
 
 
-def test_disk_cached_kernels_never_take_a_function_argument():
-    # numba keys its disk cache by argument types, and a compiled function's
-    # type is new in every process: such an argument made every process
-    # recompile the integrator and, once a user's function was in the cache
-    # index, made saving any new entry fail. Custom elements get uncached
-    # copies of the kernels instead.
+def test_a_users_element_reuses_the_disk_cached_integrator():
+    # numba keys its disk cache by argument types. A user's function reaches
+    # the kernels as a cfunc of one fixed signature, the same type in every
+    # process, so the integrator compiled once serves every new function (an
+    # njit function's type is new in every process: each recompiled the
+    # integrator, about 24 s, and broke later saves to the cache index).
+    import subprocess
+    import sys
+
     from numba.core import types as nb_types
     from numba.core.caching import FunctionCache
 
@@ -296,12 +299,28 @@ def test_disk_cached_kernels_never_take_a_function_argument():
     Oscillator(M, C, K, forces=forces).restoring_force(y_custom, y_custom)
     y_plain = Oscillator(M, C, K).simulate(u, fs=750.0, periodic=True)
     assert _rel_rms(y_custom, y_plain) > 1e-3  # the custom element was called
-    function_types = (nb_types.Dispatcher, nb_types.FunctionType, nb_types.Function)
+    stable = nb_types.FunctionType(_newmark.CUSTOM_SIGNATURE)
     cached = [d for d in vars(_newmark).values() if isinstance(getattr(d, "_cache", None), FunctionCache)]
     assert any(d is _newmark.newmark_run for d in cached)
     for kernel in cached:
         for signature in kernel.signatures:
-            assert not any(isinstance(t, function_types) for t in signature), (kernel, signature)
+            assert not any(isinstance(t, (nb_types.Dispatcher, nb_types.Function)) for t in signature)
+            assert all(t == stable for t in signature if isinstance(t, nb_types.FunctionType)), signature
+    # a new process with a function of its own loads the integrator from disk
+    script = """
+import numpy as np
+from numba import njit
+from sklearn_pnlss.physics import CustomForce, Oscillator, _newmark
+@njit
+def stiffening(p, y, yd):
+    return p[0] * y**3, 3 * p[0] * y**2, 0.0
+u = 10 * np.sin(2 * np.pi * 30 * np.arange(750) / 750)
+Oscillator(%r, %r, %r, forces=(CustomForce(stiffening, [5e9]),)).simulate(u, fs=750.0, periodic=True)
+print(sum(_newmark.newmark_run.stats.cache_misses.values()), sum(_newmark.newmark_run.stats.cache_hits.values()))
+""" % (M, C, K)
+    run = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True)
+    misses, hits = map(int, run.stdout.split()[-2:])
+    assert (misses, hits) == (0, 1), run.stdout + run.stderr
 
 
 def test_steady_state_not_reached_warns():

@@ -11,20 +11,19 @@ Adding a force element type: write ``_xxx_force`` and (if it has internal
 states) ``_xxx_rate`` below, add one branch to ``_force`` and ``_rate`` and a
 class with the same kind code in :mod:`.forces`.  Users' own stateless
 elements arrive as one compiled function ``custom(slot, p, y, yd)`` (see
-:func:`integrator_kernels`).
+:func:`custom_dispatcher`), an argument of every kernel.
 
-That function is a compile-time global of the kernels, never an argument:
-numba keys its on-disk cache by the argument types, and a function's type is
-new in every process, so a function argument made every process recompile
-the integrator (about 4 s) and add a cache file, and once a user's function
-was in the cache index, saving any new entry failed ("underlying object has
-vanished").  The module-level kernels call ``no_custom`` and are cached; a
-user's elements get uncached copies of the kernels that call them.
+That argument is a numba ``cfunc`` of the fixed signature ``CUSTOM_SIGNATURE``:
+its type is the same first-class function type in every process, so the
+kernels compiled for it stay in numba's disk cache and a user's element costs
+only the compilation of its own function.  A ``numba.njit`` function passed
+instead would be typed by its identity, new in every process: every process
+recompiled the whole integrator around it, and once such a type was in
+the cache index saving any new entry failed ("underlying object has
+vanished").
 """
-import types
-
 import numpy as np
-from numba import njit
+from numba import cfunc, njit, types
 
 from .forces import (
     KIND_BOUC_WEN,
@@ -185,19 +184,10 @@ def _clock_rate(p, o, y, yd, z, a, g, dgdy, dgdyd, dgdz):
     dgdz[a, a] = 0.0
 
 
-@njit(**_JIT)
-def no_custom(slot, p, y, yd):
-    """Placeholder custom dispatcher of an oscillator without custom elements."""
-    return np.nan, np.nan, np.nan
-
-
-# The custom dispatcher the module-level kernels are compiled against; the
-# copies made by ``integrator_kernels`` see another one under this name.
-custom_force = no_custom
 
 
 @njit(**_INLINE)
-def _force(kind, p, o, end, y, yd, z, a, dfdz):
+def _force(kind, p, o, end, y, yd, z, a, dfdz, custom):
     """Force of the element of ``kind`` whose parameters are ``p[o:end]``
     and whose states start at ``z[a]``."""
     if kind == KIND_BOUC_WEN:
@@ -220,7 +210,7 @@ def _force(kind, p, o, end, y, yd, z, a, dfdz):
         return _series_damper_force(p, o, y, yd, z, a, dfdz)
     elif kind == KIND_CUSTOM:
         # a user's function sees its own parameters only
-        return custom_force(int(p[o]), p[o + 1:end], y, yd)
+        return custom(int(p[o]), p[o + 1:end], y, yd)
     return np.nan, np.nan, np.nan  # unknown kind: poison the result, never hang
 
 
@@ -304,13 +294,26 @@ def _dparams(kind, p, o, end, y, yd, z, a, b, dfdp, dgdp):
             dfdp[i] = np.nan
 
 
-_CUSTOM_KERNELS = {}
+# ``custom(slot, p, y, yd) -> (F, dF/dy, dF/dyd)``: the kernels' custom
+# element, ``slot`` the element's place among an oscillator's custom ones.
+CUSTOM_SIGNATURE = types.UniTuple(types.float64, 3)(types.int64, types.float64[::1], types.float64,
+                                                    types.float64)
+# The compiled dispatchers, by the ids of their functions (kept alive with
+# them, so the ids are never reused).
+_DISPATCHERS = {}
 
 
-def custom_dispatcher(functions):
-    """One compiled ``custom(slot, p, y, yd)`` calling ``functions[slot]``."""
-    head = functions[0]
-    rest = custom_dispatcher(functions[1:]) if len(functions) > 1 else no_custom
+def _no_custom(slot, p, y, yd):
+    """The dispatcher of an oscillator without custom elements."""
+    return np.nan, np.nan, np.nan
+
+
+def _chain(functions):
+    """One ``njit`` function ``custom(slot, p, y, yd)`` calling
+    ``functions[slot](p, y, yd)``."""
+    if not functions:
+        return njit(nogil=True)(_no_custom)
+    head, rest = functions[0], _chain(functions[1:])
 
     @njit(nogil=True)
     def dispatch(slot, p, y, yd):
@@ -321,32 +324,18 @@ def custom_dispatcher(functions):
     return dispatch
 
 
-def integrator_kernels(functions=()):
-    """``(newmark_run, stateless_forces)`` for an oscillator whose custom
-    elements are ``functions`` (compiled ``f(p, y, yd)``), in slot order.
-
-    Without custom elements these are the module's cached kernels. With
-    them, the kernels are recompiled (once per tuple of functions, not
-    cached on disk) with ``custom_force`` bound to a dispatcher of those
-    functions.
-    """
+def custom_dispatcher(functions=()):
+    """The ``cfunc`` every kernel takes as its last argument, calling the
+    custom elements' ``functions`` (compiled ``f(p, y, yd)``) by slot:
+    compiled once per tuple of functions and process (the functions' own
+    compilation, about a second), cached on disk without them."""
     functions = tuple(functions)
-    if not functions:
-        return newmark_run, stateless_forces
     key = tuple(id(f) for f in functions)
-    if key not in _CUSTOM_KERNELS:
-        namespace = dict(globals(), custom_force=custom_dispatcher(functions))
-        # numba reads a kernel's globals when it compiles, so every copy,
-        # made in the shared namespace, calls the other copies.
-        for name in ("_force", "_total_force_and_rates", "_element_derivatives", "_initial_tangents",
-                     "_tangent_step", "_stateless_run", "_one_state_run", "_two_state_run", "_general_run",
-                     "newmark_run",
-                     "stateless_forces"):
-            py = globals()[name].py_func
-            namespace[name] = njit(nogil=True)(types.FunctionType(py.__code__, namespace, py.__name__))
-        # Keep the functions alive with the key so their ids are never reused.
-        _CUSTOM_KERNELS[key] = ((namespace["newmark_run"], namespace["stateless_forces"]), functions)
-    return _CUSTOM_KERNELS[key][0]
+    if key not in _DISPATCHERS:
+        compiled = cfunc(CUSTOM_SIGNATURE, nogil=True, cache=not functions)(
+            _no_custom if not functions else _chain(functions))
+        _DISPATCHERS[key] = (compiled, functions)
+    return _DISPATCHERS[key][0]
 
 
 # --------------------------------------------------------------------------
@@ -455,12 +444,12 @@ def _solve2_inplace(a, b):
 
 
 @njit(**_INLINE)
-def _total_force_and_rates(kinds, p_off, params, z_off, y, yd, z, zd, dfdz, dgdy, dgdyd, dgdz):
+def _total_force_and_rates(kinds, p_off, params, z_off, y, yd, z, zd, dfdz, dgdy, dgdyd, dgdz, custom):
     """Sum of element forces at (y, yd, z); fills the state rates zd."""
     total = 0.0
     for e in range(kinds.shape[0]):
         a, b = z_off[e], z_off[e + 1]
-        f, _, _ = _force(kinds[e], params, p_off[e], p_off[e + 1], y, yd, z, a, dfdz)
+        f, _, _ = _force(kinds[e], params, p_off[e], p_off[e + 1], y, yd, z, a, dfdz, custom)
         total += f
         if b > a:
             _rate(kinds[e], params, p_off[e], y, yd, z, a, b, zd, dgdy, dgdyd, dgdz)
@@ -468,7 +457,7 @@ def _total_force_and_rates(kinds, p_off, params, z_off, y, yd, z, zd, dfdz, dgdy
 
 
 @njit(**_INLINE)
-def _element_derivatives(kinds, p_off, params, z_off, y, yd, z, dfdz, g, dgdy, dgdyd, dgdz, dfdp, dgdp):
+def _element_derivatives(kinds, p_off, params, z_off, y, yd, z, dfdz, g, dgdy, dgdyd, dgdz, dfdp, dgdp, custom):
     """Every element's derivatives at (y, yd, z): ``(dF/dy, dF/dyd)`` summed
     over the elements; fills dF/dz, the rates g and their derivatives, and
     the parameter derivatives (see ``_dparams``)."""
@@ -476,7 +465,7 @@ def _element_derivatives(kinds, p_off, params, z_off, y, yd, z, dfdz, g, dgdy, d
     fyd = 0.0
     for e in range(kinds.shape[0]):
         a, b = z_off[e], z_off[e + 1]
-        _, dfdy_e, dfdyd_e = _force(kinds[e], params, p_off[e], p_off[e + 1], y, yd, z, a, dfdz)
+        _, dfdy_e, dfdyd_e = _force(kinds[e], params, p_off[e], p_off[e + 1], y, yd, z, a, dfdz, custom)
         fy += dfdy_e
         fyd += dfdyd_e
         if b > a:
@@ -516,12 +505,12 @@ def _rate_tangents(s, pi, nz, dgdy, dgdyd, dgdz, dgdp):
 
 @njit(**_INLINE)
 def _initial_tangents(tangents, param_of, y, yd, ydd, z, m, c, k, kinds, p_off, params, z_off,
-                      dfdz, g, dgdy, dgdyd, dgdz, dfdp, dgdp):
+                      dfdz, g, dgdy, dgdyd, dgdz, dfdp, dgdp, custom):
     """The acceleration's and the rates' sensitivities at a start in
     equilibrium (``init_accel``, its acceleration ``ydd``), from those of
     (y, yd, z)."""
     nz = z.shape[0]
-    fy, fyd = _element_derivatives(kinds, p_off, params, z_off, y, yd, z, dfdz, g, dgdy, dgdyd, dgdz, dfdp, dgdp)
+    fy, fyd = _element_derivatives(kinds, p_off, params, z_off, y, yd, z, dfdz, g, dgdy, dgdyd, dgdz, dfdp, dgdp, custom)
     for d in range(tangents.shape[0]):
         s = tangents[d]
         pi = param_of[d]
@@ -534,7 +523,7 @@ def _initial_tangents(tangents, param_of, y, yd, ydd, z, m, c, k, kinds, p_off, 
 
 @njit(**_INLINE)
 def _tangent_step(tangents, param_of, y1, yd1, ydd1, z1, h, m, c, k, kinds, p_off, params, z_off,
-                  dfdz, g, dgdy, dgdyd, dgdz, dfdp, dgdp, a_mat, pivots, x):
+                  dfdz, g, dgdy, dgdyd, dgdz, dfdp, dgdp, a_mat, pivots, x, custom):
     """Carry the sensitivities (``tangents``, a row per direction laid out
     as the state) over the step that has just converged at (y1, z1): the
     step's equations differentiated at their solution, one linear solve
@@ -544,7 +533,7 @@ def _tangent_step(tangents, param_of, y1, yd1, ydd1, z1, h, m, c, k, kinds, p_of
     c_acc, c_vel, jac_lin = _newmark_constants(h, m, c, k)
     half_h = 0.5 * h
     fy, fyd = _element_derivatives(kinds, p_off, params, z_off, y1, yd1, z1, dfdz, g, dgdy, dgdyd, dgdz,
-                                   dfdp, dgdp)
+                                   dfdp, dgdp, custom)
     a_mat[0, 0] = jac_lin + fy + fyd * c_vel
     for j in range(nz):
         a_mat[0, 1 + j] = dfdz[j]
@@ -599,7 +588,7 @@ def _end_rates(q, y, yd, ydd, h, c_vel, c_acc):
 # --------------------------------------------------------------------------
 @njit(**_LOOP)
 def _stateless_run(u, n_steps, h, m, c, k, kinds, p_off, params, y, yd, ydd, peak, y_out, yd_out, rtol, max_iter,
-                   no_z, dfdz):
+                   no_z, dfdz, custom):
     """``newmark_run`` without internal states or sensitivities: the same
     operations in the same order on scalars (bit-identical results), as the
     array bookkeeping of the general loop cost more than the arithmetic
@@ -625,7 +614,7 @@ def _stateless_run(u, n_steps, h, m, c, k, kinds, p_off, params, y, yd, ydd, pea
             res = m * ydd1 + c * yd1 + k * q - u1
             jac = jac_lin
             for e in range(kinds.shape[0]):
-                f, dfdy, dfdyd = _force(kinds[e], params, p_off[e], p_off[e + 1], q, yd1, no_z, 0, dfdz)
+                f, dfdy, dfdyd = _force(kinds[e], params, p_off[e], p_off[e + 1], q, yd1, no_z, 0, dfdz, custom)
                 res += f
                 jac += dfdy + dfdyd * c_vel
             step = -res / jac
@@ -646,7 +635,7 @@ def _stateless_run(u, n_steps, h, m, c, k, kinds, p_off, params, y, yd, ydd, pea
 
 @njit(**_LOOP)
 def _one_state_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, y, yd, ydd, z, zd, y_out, yd_out, z_out,
-                   rtol, max_iter, zq, dfdz, g, dgdy, dgdyd, dgdz):
+                   rtol, max_iter, zq, dfdz, g, dgdy, dgdyd, dgdz, custom):
     """``newmark_run`` with one internal state and no sensitivities (a
     hysteresis, a stiffness drift's clock, a series damper, with any
     stateless elements): the 2 x 2 Newton step of the general loop on
@@ -684,7 +673,7 @@ def _one_state_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, y, yd, y
             zq[0] = q1
             for e in range(kinds.shape[0]):
                 a, b = z_off[e], z_off[e + 1]
-                f, dfdy, dfdyd = _force(kinds[e], params, p_off[e], p_off[e + 1], q0, yd1, zq, a, dfdz)
+                f, dfdy, dfdyd = _force(kinds[e], params, p_off[e], p_off[e + 1], q0, yd1, zq, a, dfdz, custom)
                 r0 += f
                 j00 += dfdy + dfdyd * c_vel
                 if b > a:
@@ -721,7 +710,7 @@ def _one_state_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, y, yd, y
         yd = yd1
         z[0] = q1
         # Rates at the converged point, as the next step's trapezoid needs.
-        _total_force_and_rates(kinds, p_off, params, z_off, y, yd, z, zd, dfdz, dgdy, dgdyd, dgdz)
+        _total_force_and_rates(kinds, p_off, params, z_off, y, yd, z, zd, dfdz, dgdy, dgdyd, dgdz, custom)
         peak_y = max(peak_y, abs(y))
         peak_z = max(peak_z, abs(z[0]))
     return y, yd, ydd, n_failed, n_iter
@@ -729,7 +718,7 @@ def _one_state_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, y, yd, y
 
 @njit(**_LOOP)
 def _two_state_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, y, yd, ydd, z, zd, y_out, yd_out, z_out,
-                   rtol, max_iter, zq, dfdz, g, dgdy, dgdyd, dgdz):
+                   rtol, max_iter, zq, dfdz, g, dgdy, dgdyd, dgdz, custom):
     """``newmark_run`` with two internal states and no sensitivities (a
     second mode, or two elements of one state each, with any stateless
     elements): the 3 x 3 Newton step of the general loop on scalars, the
@@ -772,7 +761,7 @@ def _two_state_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, y, yd, y
             zq[1] = q2
             for e in range(kinds.shape[0]):
                 a, b = z_off[e], z_off[e + 1]
-                f, dfdy, dfdyd = _force(kinds[e], params, p_off[e], p_off[e + 1], q0, yd1, zq, a, dfdz)
+                f, dfdy, dfdyd = _force(kinds[e], params, p_off[e], p_off[e + 1], q0, yd1, zq, a, dfdz, custom)
                 r0 += f
                 j00 += dfdy + dfdyd * c_vel
                 if b > a:
@@ -805,7 +794,7 @@ def _two_state_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, y, yd, y
         z[0] = q1
         z[1] = q2
         # Rates at the converged point, as the next step's trapezoid needs.
-        _total_force_and_rates(kinds, p_off, params, z_off, y, yd, z, zd, dfdz, dgdy, dgdyd, dgdz)
+        _total_force_and_rates(kinds, p_off, params, z_off, y, yd, z, zd, dfdz, dgdy, dgdyd, dgdz, custom)
         peak_y = max(peak_y, abs(y))
         peak_z0 = max(peak_z0, abs(z[0]))
         peak_z1 = max(peak_z1, abs(z[1]))
@@ -814,7 +803,7 @@ def _two_state_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, y, yd, y
 
 @njit(**_JIT)
 def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
-                init_accel, y_out, yd_out, z_out, rtol, max_iter, tangents, param_of, dy_out):
+                init_accel, y_out, yd_out, z_out, rtol, max_iter, tangents, param_of, dy_out, custom):
     """Integrate ``n_steps`` steps of length ``h`` from ``state`` (updated in place).
 
     Step ``i`` goes from time ``i h`` to ``(i + 1) h`` with input
@@ -871,15 +860,15 @@ def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
     if init_accel:
         # Start from equilibrium of the equation of motion at t = 0.
         ftot = _total_force_and_rates(kinds, p_off, params, z_off, y, yd, z, zd,
-                                      dfdz, dgdy, dgdyd, dgdz)
+                                      dfdz, dgdy, dgdyd, dgdz, custom)
         ydd = (u[0] - c * yd - k * y - ftot) / m
         if n_dir > 0:
             _initial_tangents(tangents, param_of, y, yd, ydd, z, m, c, k, kinds, p_off, params, z_off,
-                              dfdz, g, dgdy, dgdyd, dgdz, dfdp, dgdp)
+                              dfdz, g, dgdy, dgdyd, dgdz, dfdp, dgdp, custom)
 
     if nz == 0 and n_dir == 0:
         y, yd, ydd, n_failed, n_iter = _stateless_run(u, n_steps, h, m, c, k, kinds, p_off, params, y, yd, ydd,
-                                                      abs(y), y_out, yd_out, rtol, max_iter, zq, dfdz)
+                                                      abs(y), y_out, yd_out, rtol, max_iter, zq, dfdz, custom)
         state[STATE_Y] = y
         state[STATE_YD] = yd
         state[STATE_YDD] = ydd
@@ -887,7 +876,7 @@ def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
     if nz == 1 and n_dir == 0:
         y, yd, ydd, n_failed, n_iter = _one_state_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, y, yd,
                                                       ydd, z, zd, y_out, yd_out, z_out, rtol, max_iter, zq,
-                                                      dfdz, g, dgdy, dgdyd, dgdz)
+                                                      dfdz, g, dgdy, dgdyd, dgdz, custom)
         state[STATE_Y] = y
         state[STATE_YD] = yd
         state[STATE_YDD] = ydd
@@ -897,7 +886,7 @@ def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
     if nz == 2 and n_dir == 0:
         y, yd, ydd, n_failed, n_iter = _two_state_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, y, yd,
                                                       ydd, z, zd, y_out, yd_out, z_out, rtol, max_iter, zq,
-                                                      dfdz, g, dgdy, dgdyd, dgdz)
+                                                      dfdz, g, dgdy, dgdyd, dgdz, custom)
         state[STATE_Y] = y
         state[STATE_YD] = yd
         state[STATE_YDD] = ydd
@@ -908,13 +897,13 @@ def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
 
     return _general_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state, y, yd, ydd, z, zd, y_out,
                         yd_out, z_out, rtol, max_iter, tangents, param_of, dy_out, q, res, jac, peak, dfdz, g, dgdy,
-                        dgdyd, dgdz, zq, dfdp, dgdp, a_mat, pivots, x)
+                        dgdyd, dgdz, zq, dfdp, dgdp, a_mat, pivots, x, custom)
 
 
 @njit(**_LOOP)
 def _general_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state, y, yd, ydd, z, zd, y_out, yd_out, z_out,
                  rtol, max_iter, tangents, param_of, dy_out, q, res, jac, peak, dfdz, g, dgdy, dgdyd, dgdz, zq, dfdp,
-                 dgdp, a_mat, pivots, x):
+                 dgdp, a_mat, pivots, x, custom):
     """The loop of :func:`newmark_run` for any number of states, with
     sensitivities, on the work arrays it made."""
     nz = z_off[z_off.shape[0] - 1]
@@ -963,7 +952,7 @@ def _general_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state, y, 
                 zq[j] = q[1 + j]
             for e in range(kinds.shape[0]):
                 a, b = z_off[e], z_off[e + 1]
-                f, dfdy, dfdyd = _force(kinds[e], params, p_off[e], p_off[e + 1], y1, yd1, zq, a, dfdz)
+                f, dfdy, dfdyd = _force(kinds[e], params, p_off[e], p_off[e + 1], y1, yd1, zq, a, dfdz, custom)
                 res[0] += f
                 jac[0, 0] += dfdy + dfdyd * c_vel
                 for j in range(a, b):
@@ -1010,11 +999,11 @@ def _general_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state, y, 
             z[j] = q[1 + j]
         if n_dir > 0:
             _tangent_step(tangents, param_of, y, yd, ydd, z, h, m, c, k, kinds, p_off, params, z_off,
-                          dfdz, g, dgdy, dgdyd, dgdz, dfdp, dgdp, a_mat, pivots, x)
+                          dfdz, g, dgdy, dgdyd, dgdz, dfdp, dgdp, a_mat, pivots, x, custom)
         if nz > 0:
             # Rates at the converged point, as the next step's trapezoid needs.
             _total_force_and_rates(kinds, p_off, params, z_off, y, yd, z, zd,
-                                   dfdz, dgdy, dgdyd, dgdz)
+                                   dfdz, dgdy, dgdyd, dgdz, custom)
         peak[0] = max(peak[0], abs(y))
         for j in range(nz):
             peak[1 + j] = max(peak[1 + j], abs(z[j]))
@@ -1029,7 +1018,7 @@ def _general_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state, y, 
 
 
 @njit(**_JIT)
-def stateless_forces(kinds, p_off, params, z_off, y, yd):
+def stateless_forces(kinds, p_off, params, z_off, y, yd, custom):
     """Total force of the elements without internal states at each sample
     of a motion ``(y, yd)`` (elements with states are skipped)."""
     out = np.zeros(y.shape[0])
@@ -1039,6 +1028,6 @@ def stateless_forces(kinds, p_off, params, z_off, y, yd):
         if z_off[e + 1] > z_off[e]:
             continue
         for i in range(y.shape[0]):
-            f, _, _ = _force(kinds[e], params, p_off[e], p_off[e + 1], y[i], yd[i], empty, 0, dfdz)
+            f, _, _ = _force(kinds[e], params, p_off[e], p_off[e + 1], y[i], yd[i], empty, 0, dfdz, custom)
             out[i] += f
     return out

@@ -431,13 +431,12 @@ class CustomForce(ForceElement):
 
     Notes
     -----
-    The first simulation with a new ``function`` compiles the integrator
-    again around it, once per function object and process (the built-in
-    elements' integrator comes from numba's disk cache, where a user's
-    function, new in every process, cannot be kept): that first call takes
-    far longer than a simulation, the later ones run at the built-in
-    elements' speed. Define the function once, at module level, and reuse
-    it (``with_params`` keeps it).
+    The first simulation with a new ``function`` compiles that function and
+    a small dispatch around it, once per function object and process; the
+    integrator itself comes from numba's disk cache, compiled once for every
+    user's element (``tests/test_simulator.py`` checks that a
+    new process with a new function loads it from there). Define the
+    function once, at module level, and reuse it (``with_params`` keeps it).
 
     Examples
     --------

@@ -8,7 +8,7 @@ from scipy import fft as sp_fft
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.utils import check_random_state
 
-from ._newmark import STATE_Z, integrator_kernels
+from ._newmark import STATE_Z, custom_dispatcher, newmark_run, stateless_forces
 from ._shooting import PeriodShooter
 from .forces import KIND_CUSTOM, pack_forces
 from .resampling import check_factors, check_signal, decimate_fir, upsample_fft
@@ -188,7 +188,6 @@ class Oscillator:
         self.stiffness = float(stiffness)
         self.forces = tuple(forces)
         self._packed = pack_forces(self.forces)
-        self._newmark_run, self._stateless_forces = integrator_kernels(self._packed[4])
 
     def __repr__(self):
         return (
@@ -205,6 +204,15 @@ class Oscillator:
     def time_varying(self):
         """True when a force element depends on time (no periodic steady state)."""
         return any(f.time_varying for f in self.forces)
+
+    def _newmark_run(self, *args):
+        """The integrator's kernel (:func:`._newmark.newmark_run`) with this
+        oscillator's custom elements."""
+        return newmark_run(*args, custom_dispatcher(self._packed[4]))
+
+    def _stateless_forces(self, *args):
+        """The stateless elements' forces along a motion, custom ones included."""
+        return stateless_forces(*args, custom_dispatcher(self._packed[4]))
 
     def restoring_force(self, y, yd):
         """The force ``c yd + k y + sum_e F_e(y, yd)`` of the elements without
