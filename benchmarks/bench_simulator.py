@@ -6,6 +6,9 @@ Measures
   the first call in a fresh interpreter with an empty cache (a cold compile,
   as after a fresh install) and with the on-disk cache already filled (what
   every later session pays);
+* the same for a user's own element (a new ``CustomForce`` function in a
+  fresh interpreter, the cache filled): the function and its dispatch are
+  compiled, the integrator is loaded from the cache;
 * ``simulate_bouc_wen`` on one 8192-sample multisine period (periodic steady
   state) and on the 153000-sample benchmark sweep (from rest);
 * the default ``make_bouc_wen()`` with ``n_jobs=1`` and ``n_jobs=2``;
@@ -49,6 +52,30 @@ t3 = time.perf_counter()
 print(json.dumps({"import": t1 - t0, "first_call": t2 - t1, "second_call": t3 - t2}))
 """
 
+# The same with a user's element: a function new to this interpreter (the
+# Bouc-Wen oscillator plus a cubic spring of the user's own).
+_FIRST_CUSTOM_CALL = """
+import json, time
+t0 = time.perf_counter()
+import numpy as np
+from numba import njit
+from sklearn_pnlss.datasets import bouc_wen_oscillator
+from sklearn_pnlss.physics import CustomForce
+from sklearn_pnlss.signals import multisine
+@njit
+def users_spring(p, y, yd):
+    return p[0] * y**3, 3.0 * p[0] * y**2, 0.0
+osc = bouc_wen_oscillator()
+osc = osc.with_forces(osc.forces + (CustomForce(users_spring, [1e9]),))
+u = multisine(256, rms=50.0, random_state=0)[0][0, :, 0]
+t1 = time.perf_counter()
+osc.simulate(u, fs=750.0, periodic=True)
+t2 = time.perf_counter()
+osc.simulate(u, fs=750.0, periodic=True)
+t3 = time.perf_counter()
+print(json.dumps({"import": t1 - t0, "first_call": t2 - t1, "second_call": t3 - t2}))
+"""
+
 
 def _relative_rms(y_true, y_pred):
     y_true, y_pred = np.ravel(y_true), np.ravel(y_pred)
@@ -65,11 +92,14 @@ def run(data_dir, repeat):
     with tempfile.TemporaryDirectory() as empty_cache:
         cold = first_call(_FIRST_CALL, empty_cache)
     warm = first_call(_FIRST_CALL)
-    results["compile"] = {"cold_cache": cold, "warm_cache": warm}
+    custom = first_call(_FIRST_CUSTOM_CALL)
+    results["compile"] = {"cold_cache": cold, "warm_cache": warm, "custom_element_warm_cache": custom}
     print(f"  cold cache: compile {cold['compile_or_load']:.2f} s "
           f"(first call {cold['first_call']:.2f} s, import {cold['import']:.2f} s)")
     print(f"  warm cache: load    {warm['compile_or_load']:.2f} s "
           f"(first call {warm['first_call']:.2f} s, import {warm['import']:.2f} s)")
+    print(f"  a user's element, warm cache: compile its function and load {custom['compile_or_load']:.2f} s "
+          f"(first call {custom['first_call']:.2f} s)")
 
     # Warm up in this process too, so the timings below are run times only.
     # (A 50 N input: at very small amplitudes the hysteresis barely forgets

@@ -313,7 +313,7 @@ def _call_custom(custom, slot, p, y, yd):
     """``custom(slot, p, y, yd)``, or NaNs when ``custom`` is None."""
 
 
-@overload(_call_custom, inline="always")
+@overload(_call_custom)
 def _call_custom_typed(custom, slot, p, y, yd):
     # Chosen by the argument's type when a kernel is compiled: the kernels of
     # an oscillator without custom elements (``custom`` None) hold no call
