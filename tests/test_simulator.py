@@ -284,7 +284,7 @@ def test_a_users_element_reuses_the_disk_cached_integrator():
     # the kernels as a cfunc of one fixed signature, the same type in every
     # process, so the integrator compiled once serves every new function (an
     # njit function's type is new in every process: each recompiled the
-    # integrator, about 24 s, and broke later saves to the cache index).
+    # whole integrator, and broke later saves to the cache index).
     import subprocess
     import sys
 

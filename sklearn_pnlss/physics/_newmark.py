@@ -185,8 +185,6 @@ def _clock_rate(p, o, y, yd, z, a, g, dgdy, dgdyd, dgdz):
     dgdz[a, a] = 0.0
 
 
-
-
 @njit(**_INLINE)
 def _force(kind, p, o, end, y, yd, z, a, dfdz, custom):
     """Force of the element of ``kind`` whose parameters are ``p[o:end]``
@@ -527,7 +525,8 @@ def _initial_tangents(tangents, param_of, y, yd, ydd, z, m, c, k, kinds, p_off, 
     equilibrium (``init_accel``, its acceleration ``ydd``), from those of
     (y, yd, z)."""
     nz = z.shape[0]
-    fy, fyd = _element_derivatives(kinds, p_off, params, z_off, y, yd, z, dfdz, g, dgdy, dgdyd, dgdz, dfdp, dgdp, custom)
+    fy, fyd = _element_derivatives(kinds, p_off, params, z_off, y, yd, z, dfdz, g, dgdy, dgdyd, dgdz, dfdp, dgdp,
+                                   custom)
     for d in range(tangents.shape[0]):
         s = tangents[d]
         pi = param_of[d]
@@ -837,6 +836,9 @@ def newmark_run(u, n_steps, h, m, c, k, kinds, p_off, params, z_off, state,
     They are the exact derivatives of the discrete scheme (its equations
     differentiated at each converged step), so a fit's Jacobian costs one
     simulation instead of one per parameter.
+
+    ``custom`` calls the oscillator's custom elements by slot, None when it
+    has none (see :func:`custom_dispatcher`).
 
     Returns
     -------
