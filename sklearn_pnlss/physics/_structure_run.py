@@ -57,7 +57,8 @@ def _connection_forces(kinds, p_off, params, z_off, r, rd, z, forces, dfdr, dfdr
     """Each connection's force at its relative motion ``(r, rd)`` and the
     states ``z``, with its derivatives (``dfdz`` at the states' indices)."""
     for e in range(kinds.shape[0]):
-        f, fr, frd = _force(kinds[e], params, p_off[e], p_off[e + 1], r[e], rd[e], z, z_off[e], dfdz)
+        # no custom elements: a Connection takes the built-in ones only
+        f, fr, frd = _force(kinds[e], params, p_off[e], p_off[e + 1], r[e], rd[e], z, z_off[e], dfdz, None)
         forces[e] = f
         dfdr[e] = fr
         dfdrd[e] = frd
