@@ -302,8 +302,10 @@ CUSTOM_SIGNATURE = types.UniTuple(types.float64, 3)(types.int64, types.float64[:
 _DISPATCHERS = {}
 
 
+@njit(nogil=True)
 def _no_custom(slot, p, y, yd):
-    """The dispatch's end: a slot past the last custom element."""
+    """No custom element: a kernel of an oscillator without them, or the
+    dispatch's end (a slot past the last custom element)."""
     return np.nan, np.nan, np.nan
 
 
@@ -318,7 +320,7 @@ def _call_custom_typed(custom, slot, p, y, yd):
     # to an unknown function, which cost their loops 3-9 % (the compiler
     # had to assume the call could write to any array).
     if isinstance(custom, types.NoneType):
-        return lambda custom, slot, p, y, yd: (np.nan, np.nan, np.nan)
+        return lambda custom, slot, p, y, yd: _no_custom(slot, p, y, yd)
     return lambda custom, slot, p, y, yd: custom(slot, p, y, yd)
 
 
@@ -326,7 +328,7 @@ def _chain(functions):
     """One ``njit`` function ``custom(slot, p, y, yd)`` calling
     ``functions[slot](p, y, yd)``."""
     if not functions:
-        return njit(nogil=True)(_no_custom)
+        return _no_custom
     head, rest = functions[0], _chain(functions[1:])
 
     @njit(nogil=True)

@@ -434,9 +434,9 @@ class CustomForce(ForceElement):
     The first simulation with a new ``function`` compiles that function and
     a small dispatch around it, once per function object and process; the
     integrator itself comes from numba's disk cache, compiled once for every
-    user's element (``tests/test_simulator.py`` checks that a
-    new process with a new function loads it from there). Define the
-    function once, at module level, and reuse it (``with_params`` keeps it).
+    user's element (``tests/test_simulator.py`` checks that a new process
+    with a new function loads it from there). Define the function once, at
+    module level, and reuse it (``with_params`` keeps it).
 
     Examples
     --------
