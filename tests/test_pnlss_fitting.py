@@ -118,28 +118,32 @@ def test_noise_weighting_beats_unweighted_under_coloured_noise():
 def test_noise_weighting_weighs_each_level_by_its_own_noise(monkeypatch):
     """Two levels of a campaign, the quiet one nearly noiseless (0.2 % of
     its rms), the loud one noisy (20 %): weighted by each record's own noise
-    the quiet level counts as its noise deserves. Measured on a validation
-    multisine between the levels: -54.6 dB, against -39.1 dB with each
-    level relative to its power and -33.7 dB with the noise pooled over
-    both records (the loud one's noise then weighs the quiet one)."""
+    the quiet level counts as its noise deserves. Measured on 20 validation
+    multisines between the levels: -58.9 dB, against -47.4 dB with each
+    level relative to its power and -47.4 dB with the noise pooled over
+    both records (the loud one's noise then weighs the quiet one). Each
+    level has two realisations of eight periods: with one of four, every
+    fit ran away on new realisations of the loud level and was taken back
+    to its first iterates (-41.8 dB for all three)."""
     rng = np.random.default_rng(21)
     truth = _truth(rng)
-    Xq, yq = _data(truth, n_periods=4, n_realizations=1, rms=0.2, seed=1)
-    Xl, yl = _data(truth, n_periods=4, n_realizations=1, rms=0.5, seed=6)
+    Xq, yq = _data(truth, n_periods=8, n_realizations=2, rms=0.2, seed=1)
+    Xl, yl = _data(truth, n_periods=8, n_realizations=2, rms=0.5, seed=6)
     yq = yq + 0.002 * yq.std() * rng.standard_normal(yq.shape)
     yl = yl + 0.2 * yl.std() * rng.standard_normal(yl.shape)
     X, y = np.concatenate([Xq, Xl]), np.concatenate([yq, yl])
-    X_val, y_val = _data(truth, n_periods=1, n_realizations=2, seed=10, rms=0.35)
+    X_val, y_val = _data(truth, n_periods=1, n_realizations=20, seed=10, rms=0.35)
 
     def error(weighting):
-        return -PNLSSRegressor(3, period=N, weighting=weighting, max_iter=30).fit(X, y).score(X_val, y_val)
+        return -PNLSSRegressor(3, period=N, weighting=weighting, max_iter=30, random_state=0).fit(
+            X, y).score(X_val, y_val)
 
     own, relative = error("noise"), error("relative")
     from sklearn_pnlss.frequency.noise import periodic_noise_variance
     monkeypatch.setattr("sklearn_pnlss.statespace.fitting.signal_noise_variances",
                         lambda yn, period: [periodic_noise_variance(yn, period)] * len(yn))
     pooled = error("noise")
-    assert own < -50 and own < relative - 10 and own < pooled - 10, (own, relative, pooled)
+    assert own < -55 and own < relative - 8 and own < pooled - 8, (own, relative, pooled)
 
 
 def test_validation_keeps_the_best_iterate():

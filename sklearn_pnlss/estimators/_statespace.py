@@ -5,6 +5,7 @@ of :mod:`sklearn_pnlss.statespace.fitting`), and simulation for predict.
 Where a fit happens: :meth:`StateSpaceRegressorBase.fit`, here.
 """
 import warnings
+from dataclasses import replace
 from numbers import Integral, Real
 
 import numpy as np
@@ -12,6 +13,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from ..statespace.fitting import TIME_DOMAIN_WEIGHTINGS, FitSettings, relative_weights, simulation_objectives
 from ..statespace.model_base import DivergenceError
+from ..statespace.new_inputs import random_phase_inputs
 from ..statespace.scaled import normalised_linear_start
 from ..utils.handover import detach_stage
 from ..utils.parameters import Interval, Options, validates_parameters
@@ -79,7 +81,10 @@ class StateSpaceRegressorBase(SignalRegressorBase):
         X, stage = detach_stage(X)
         X_list, y_list = self._validate_fit_data(X, y)
         self.period_ = self._handed_period(stage)
-        settings = self._fit_settings()
+        # checked before a model is returned: it must not run away on new
+        # realisations of the training excitation (periodic inputs only)
+        settings = replace(self._fit_settings(), new_inputs=random_phase_inputs(
+            X_list, self.period_, random_state=self.random_state))
         weights = self._check_time_weight(time_weight, y_list)
         if self.weighting == "relative":
             weights = relative_weights(y_list, weights)
@@ -167,6 +172,9 @@ class StateSpaceRegressorBase(SignalRegressorBase):
                 "nonlinearity at its trusted range no longer bounds the state. Pass validation "
                 "signals (X_val, y_val) or fewer iterations (max_iter).", UserWarning, stacklevel=4,
             )
+        if fit.new_input_runaway is not None:
+            ranking = "the latest" if fit.validation_history is None else "the best on the validation signals"
+            warnings.warn(fit.new_input_runaway.message(ranking), UserWarning, stacklevel=4)
         self.model_ = fit.model
         self.n_iter_ = fit.n_iter
         self.best_iteration_ = fit.best_iteration

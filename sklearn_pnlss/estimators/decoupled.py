@@ -343,6 +343,7 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
                 start = PNLSSRegressor(
                     self.n_states, degrees=(2, 3), variables="states_inputs",
                     equations="both" if self.output_branches else "state", period=self.period_,
+                    random_state=self.random_state,
                 )
             X_fit = X_list if stage is None else attach_stage(X_list, stage)
             X_val, y_val = val if val is not None else (None, None)

@@ -175,11 +175,12 @@ class StateSpaceModel:
             x = x_new
         return x, None, None
 
-    def _steady_run(self, U, period):
+    def _steady_run(self, U, period, max_periods=200):
         """Outputs and states of ``U`` in periodic steady state: the
         converged period repeated when ``U`` repeats it, else a simulation
-        of ``U`` from the steady-state start."""
-        x0, Y, X = self._steady_period(U[:period])
+        of ``U`` from the steady-state start (from where ``max_periods``
+        left it when the state has not repeated)."""
+        x0, Y, X = self._steady_period(U[:period], max_periods)
         k = U.shape[0] // period
         if Y is not None and (k == 1 or np.array_equal(U.reshape(k, period, -1), np.broadcast_to(
                 U[:period], (k, period, U.shape[1])))):
@@ -193,11 +194,12 @@ class StateSpaceModel:
             return self.simulate(U)[0]
         return self._steady_run(U, period)[0]
 
-    def states_inputs(self, U, period=None):
+    def states_inputs(self, U, period=None, max_periods=200):
         """``[x; u]`` (N, n + m) along the simulation of one signal ``U``:
         in periodic steady state when its length is a whole number of
-        ``period`` samples, else from rest. Raises :class:`DivergenceError`."""
-        X = self._steady_run(U, period)[1] if is_periodic(U.shape[0], period) else self.simulate_states(U)
+        ``period`` samples (sought over at most ``max_periods``), else from
+        rest. Raises :class:`DivergenceError`."""
+        X = self._steady_run(U, period, max_periods)[1] if is_periodic(U.shape[0], period) else self.simulate_states(U)
         return np.hstack([X, U])
 
     def trajectory(self, U_list, period=None):
@@ -214,13 +216,14 @@ class StateSpaceModel:
         return np.vstack([np.hstack([self.simulate_states(seg.U, self.segment_start(seg)), seg.U])
                           for seg in segments])
 
-    def range_excursion(self, U, period=None):
+    def range_excursion(self, U, period=None, max_periods=200):
         """How far the simulation of ``U`` (periodic steady state with
-        ``period``) takes the nonlinearity's variables past their trusted
-        range: the largest excursion as a fraction of the range's width (0
-        inside it or without bounds, inf when the simulation diverges)."""
+        ``period``, sought over at most ``max_periods``) takes the
+        nonlinearity's variables past their trusted range: the largest
+        excursion as a fraction of the range's width (0 inside it or without
+        bounds, inf when the simulation diverges)."""
         try:
-            v = self.bounded_variables(self.states_inputs(U, period))
+            v = self.bounded_variables(self.states_inputs(U, period, max_periods))
         except DivergenceError:
             return np.inf
         lo, hi = self.bounds[:, 0], self.bounds[:, 1]
@@ -229,12 +232,14 @@ class StateSpaceModel:
         excess = excess[np.isfinite(hi - lo)]
         return float(max(excess.max(), 0.0)) if excess.size else 0.0
 
-    def runs_away(self, U, period=None, factor=1.0):
+    def runs_away(self, U, period=None, factor=1.0, max_periods=200):
         """Whether the simulation of ``U`` diverges, or takes the
         nonlinearity's variables past their trusted range by more than
         ``factor`` times its width: a bounded model then sits on an orbit it
-        was never fitted for."""
-        return self.range_excursion(U, period) > factor
+        was never fitted for. ``max_periods``: see :meth:`range_excursion`
+        (an orbit that runs away seldom becomes periodic, so it always
+        takes that many)."""
+        return self.range_excursion(U, period, max_periods) > factor
 
     def segment_start(self, seg):
         """The state a segment's simulation starts from: rest, or the one

@@ -1,0 +1,67 @@
+"""New inputs of the training kind and level, made from the training inputs
+themselves: what a fitted model is checked on before it is returned.
+
+A model fitted on few realisations can fit them well and still run away on
+the next realisation of the same excitation: Bouc-Wen, PNLSS degrees
+(3, 5, 7) on three realisations of two periods at 55 N, one or two of 14 new
+50 N multisines ended 12 to 32 dB above 1 m of error (the linear start:
+-76 dB) for four of six data draws. Such a model leaves the range its
+nonlinearity was fitted on; a new random-phase realisation of the training
+spectrum shows it without any new measurement.
+"""
+import numpy as np
+from sklearn.utils import check_random_state
+
+from ..utils.validation import is_periodic
+
+__all__ = ["N_NEW_INPUTS", "random_phase_inputs"]
+
+# Realisations checked: a model that runs away on one new realisation in
+# seven (the Bouc-Wen case above) passes all 40 with probability 0.2 %.
+N_NEW_INPUTS = 40
+
+
+def random_phase_inputs(X_list, period, n_inputs=N_NEW_INPUTS, random_state=None):
+    """New random-phase realisations of the periodic training inputs.
+
+    Each keeps the amplitude spectrum of one training signal's
+    period-averaged input (the signals taken in turn) and draws new phases
+    on every bin but DC and Nyquist, each input channel on its own. A
+    realisation whose peak exceeds that training period's peak is scaled
+    down to it: the check never asks for more than the training input
+    reached (a periodic sweep's random-phase copy has a higher crest
+    factor than the sweep).
+
+    Parameters
+    ----------
+    X_list : list of ndarray of shape (n_samples, n_inputs)
+        Training inputs; those not made of whole periods are left out.
+    period : int or None
+    n_inputs : int, default=N_NEW_INPUTS
+    random_state : int, RandomState instance or None
+
+    Returns
+    -------
+    tuple of ndarray of shape (period, n_inputs)
+        Empty without a period or without periodic training inputs.
+    """
+    periodic = [U for U in X_list if is_periodic(U.shape[0], period)]
+    if period is None or not periodic:
+        return ()
+    rng = check_random_state(random_state)
+    periods = [U.reshape(-1, period, U.shape[1]).mean(axis=0) for U in periodic]
+    spectra = [np.fft.rfft(P, axis=0) for P in periods]
+    out = []
+    for k in range(n_inputs):
+        spectrum, reference = spectra[k % len(spectra)], periods[k % len(periods)]
+        new = np.abs(spectrum) * np.exp(2j * np.pi * rng.random_sample(spectrum.shape))
+        new[0] = spectrum[0]
+        if period % 2 == 0:
+            new[-1] = spectrum[-1]  # the Nyquist bin of a real signal is real
+        mean = spectrum[0].real / period
+        varying = np.fft.irfft(new, period, axis=0) - mean
+        peak = np.max(np.abs(varying), axis=0)
+        allowed = np.max(np.abs(reference - mean), axis=0)
+        scale = np.minimum(1.0, allowed / np.where(peak > 0, peak, 1.0))
+        out.append(mean + varying * scale)
+    return tuple(out)
