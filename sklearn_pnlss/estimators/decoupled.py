@@ -142,7 +142,9 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
     verbose : int, default=0
         Print the iterations of each start.
     random_state : int, RandomState instance or None, default=None
-        Seeds the sampling points and CPD starts of the ``n_init`` starts.
+        Seeds the sampling points and CPD starts of the ``n_init`` starts,
+        and the new random-phase realisations of the training inputs that
+        the fitted model is checked on (see ``fit``).
 
     Attributes
     ----------
@@ -289,7 +291,7 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         )
         fits, cpd_errors = zip(*runs)
         scores = np.array([
-            f.validation_error if val is not None else 10 * np.log10(f.cost_history[-1]) for f in fits
+            f.validation_error if val is not None else 10 * np.log10(f.kept_cost) for f in fits
         ])
         self.best_init_ = int(np.argmin(scores))
         self.init_scores_ = scores

@@ -158,7 +158,9 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         error), lambda, and the validation error when validation signals are
         given.
     random_state : int, RandomState instance or None, default=None
-        Unused by the deterministic fit; kept for API consistency.
+        Seeds the new random-phase realisations of the training inputs that
+        the fitted model is checked on (see ``fit``); the fit itself is
+        deterministic.
 
     Attributes
     ----------

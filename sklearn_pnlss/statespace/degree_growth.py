@@ -121,5 +121,5 @@ def chain_stages(fits):
     return LMFit(
         model=last.model, n_iter=done, best_iteration=best, cost_history=joined([f.cost_history for f in fits]),
         validation_history=val, validation_error=last.validation_error,
-        new_input_runaway=last.new_input_runaway,
+        kept_cost=last.kept_cost, new_input_runaway=last.new_input_runaway,
     )

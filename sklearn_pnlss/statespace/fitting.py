@@ -107,6 +107,7 @@ class LMFit:
     cost_history: np.ndarray
     validation_history: np.ndarray | None
     validation_error: float  # dB, best over the iterations; NaN without validation
+    kept_cost: float = np.nan  # the kept iterate's cost (its stage's objective)
     # set when the preferred iterate ran away on the settings' new inputs
     new_input_runaway: "NewInputRunaway | None" = None
 
@@ -334,12 +335,13 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
             return np.inf
         return value
 
-    iterates = []  # (iteration over the stages, parameters, validation error) of every iterate
+    # (iteration over the stages, parameters, validation error, cost) of every iterate
+    iterates = []
 
     def callback(it, theta, cost, lam):
         v = validation_error(theta)
         val_history.append(v)
-        iterates.append((done + it, theta.copy(), v))
+        iterates.append((done + it, theta.copy(), v, cost))
         if v < best["err"]:
             best.update(err=v, theta=theta.copy(), it=done + it)
         cost_db = 10 * np.log10(cost / n_res)
@@ -386,13 +388,14 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
         cost_history=np.array([h[1] for h in result.history]),
         validation_history=np.array(val_history) if validation is not None else None,
         validation_error=kept[2] if validation is not None else np.nan,
+        kept_cost=kept[3],
         new_input_runaway=runaway,
     )
 
 
 def _sane_on_new_inputs(order, bounded_model, new_inputs, period):
     """``(kept, runaway)``: the kept iterate, the first of ``order``
-    (``(iteration, theta, validation error)``, most wanted first) whose
+    (``(iteration, theta, validation error, cost)``, most wanted first) whose
     bounded model does not run away on any of ``new_inputs`` (normalised,
     one period each), and None when that is the first, else
     :class:`NewInputRunaway`. The first is kept when there are no new inputs

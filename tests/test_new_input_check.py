@@ -1,0 +1,89 @@
+"""The fitted model is checked on new realisations of its training inputs:
+an iterate that runs away on them is not returned."""
+import warnings
+from unittest import mock
+
+import numpy as np
+import pytest
+
+from sklearn_pnlss import PNLSSRegressor
+from sklearn_pnlss.statespace.new_inputs import random_phase_inputs
+from test_pnlss_fitting import N, _data, _truth
+
+
+def test_random_phase_inputs_keep_the_spectrum_and_the_peak():
+    X, _ = _data(_truth(np.random.default_rng(0)), n_periods=2, n_realizations=2, rms=0.5, seed=3)
+    new = random_phase_inputs(list(X), N, n_inputs=6, random_state=0)
+    assert len(new) == 6 and all(U.shape == (N, 1) for U in new)
+    for k, U in enumerate(new):
+        reference = X[k % 2, :N]
+        assert np.max(np.abs(U)) <= np.max(np.abs(reference)) + 1e-12
+        # the spectrum up to one common scale (the peak's)
+        R = np.abs(np.fft.rfft(reference[:, 0]))
+        excited = R > 1e-8 * R.max()
+        ratio = np.abs(np.fft.rfft(U[:, 0]))[excited] / R[excited]
+        assert np.ptp(ratio) < 1e-9 and 0.6 < ratio[0] <= 1 + 1e-12
+    assert not np.allclose(new[0], X[0, :N])
+    assert random_phase_inputs([X[0, :N + 5]], N) == ()  # not whole periods: nothing to check
+    assert random_phase_inputs(list(X), None) == ()
+
+
+def _few_data():
+    """Two levels, one realisation of four periods each, 0.2 % noise on the
+    quiet one and 20 % on the loud one: the kind of data a fit overfits."""
+    rng = np.random.default_rng(21)
+    truth = _truth(rng)
+    Xq, yq = _data(truth, n_periods=4, n_realizations=1, rms=0.2, seed=1)
+    Xl, yl = _data(truth, n_periods=4, n_realizations=1, rms=0.5, seed=6)
+    yq = yq + 0.002 * yq.std() * rng.standard_normal(yq.shape)
+    yl = yl + 0.2 * yl.std() * rng.standard_normal(yl.shape)
+    return truth, np.concatenate([Xq, Xl]), np.concatenate([yq, yl])
+
+
+def test_a_model_that_runs_away_on_new_realisations_is_not_returned():
+    """Unchecked, the last iterate ran away on 17 of 20 new realisations of
+    the loud level (errors up to 16 dB above the output's unit scale, the
+    validation level 0.35 on 4 of 20); checked, on none of them."""
+    truth, X, y = _few_data()
+    X_new, y_new = _data(truth, n_periods=1, n_realizations=20, seed=100, rms=0.5)
+
+    def fitted():
+        return PNLSSRegressor(3, period=N, weighting="noise", max_iter=30, random_state=0).fit(X, y)
+
+    with mock.patch("sklearn_pnlss.estimators._statespace.random_phase_inputs", lambda *a, **k: ()):
+        unchecked = fitted()
+    with pytest.warns(UserWarning, match="runs away on .* of 40 new random-phase realisations"):
+        checked = fitted()
+    assert checked.best_iteration_ < unchecked.best_iteration_
+    runaways = [sum(m.range_excursion(U[None])[0] > 1 for U in X_new) for m in (unchecked, checked)]
+    assert runaways[0] >= 10 and runaways[1] == 0, runaways
+    errors = [-m.score(X_new, y_new) for m in (unchecked, checked)]
+    assert errors[0] > 0 and errors[1] < -25, errors
+
+
+def test_no_check_without_periodic_inputs_and_no_warning_when_it_passes():
+    truth = _truth(np.random.default_rng(5))
+    X, y = _data(truth, n_periods=4, n_realizations=4, rms=0.3, seed=2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", UserWarning)
+        model = PNLSSRegressor(3, period=N, max_iter=10, random_state=0).fit(X, y)
+    assert model.best_iteration_ == model.n_iter_
+    assert random_phase_inputs(list(X[:, :N + 1]), N) == ()
+
+
+@pytest.mark.slow
+def test_small_data_bouc_wen_model_does_not_lose_to_its_linear_start():
+    """PNLSS (3, 5, 7) on three realisations of two periods at 55 N (data
+    draw 3): unchecked it ran away on one of 14 new 50 N realisations
+    (+32 dB); checked, every one is far below the linear start's -76 dB."""
+    from sklearn_pnlss.datasets import make_bouc_wen
+    from sklearn_pnlss.metrics import rms_error
+
+    data = make_bouc_wen(n_realizations=3, n_periods=2, rms=55.0, random_state=3, n_jobs=2)
+    new = make_bouc_wen(n_realizations=14, n_periods=1, rms=50.0, noise_rms=0.0, random_state=1053, n_jobs=2)
+    with pytest.warns(UserWarning, match="runs away"):
+        model = PNLSSRegressor(3, degrees=(3, 5, 7), variables="states", period=data.period, n_jobs=2,
+                               random_state=0).fit(data.X_train, data.y_train)
+    db = np.array([float(rms_error(b[None], model.predict(a[None]), db=True))
+                   for a, b in zip(new.X_train, new.y_train)])
+    assert np.max(db) < -85, db
