@@ -160,7 +160,7 @@ class PNLSSRegressor(StateSpaceRegressorBase):
     random_state : int, RandomState instance or None, default=None
         Seeds the new random-phase realisations of the training inputs that
         the fitted model is checked on (see ``fit``); the fit itself is
-        deterministic.
+        deterministic. Pass an int for the same model from every call.
 
     Attributes
     ----------

@@ -29,8 +29,8 @@ from .objective import SimulationError
 from .segments import make_segments, transient_length
 
 __all__ = [
-    "AMPLIFIED_VALIDATION", "FitSettings", "LMFit", "NewInputRunaway", "TIME_DOMAIN_WEIGHTINGS", "iteration_listener", "optimise",
-    "relative_weights", "simulation_objectives", "trusted_model",
+    "AMPLIFIED_VALIDATION", "FitSettings", "LMFit", "NewInputRunaway", "TIME_DOMAIN_WEIGHTINGS",
+    "iteration_listener", "optimise", "relative_weights", "simulation_objectives", "trusted_model",
 ]
 
 # The weightings that act in time (per sample, beside ``time_weight``); the
@@ -126,7 +126,7 @@ class NewInputRunaway:
         """The warning an estimator gives; ``ranking``: how the iterates
         were ordered ("the latest", "the best on the validation signals")."""
         kept = (f"iterate {self.kept_iteration} is kept instead, {ranking} of those that do not"
-                if self.kept_iteration is not None else "so does every earlier iterate, so it is kept all the same")
+                if self.kept_iteration is not None else "so do the other iterates probed, so it is kept all the same")
         return (
             f"The fitted model (iterate {self.iteration}) runs away on {self.n_runaway} of {self.n_inputs} new "
             "random-phase realisations of the training inputs (it leaves the range its nonlinearity was fitted "
@@ -279,10 +279,10 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
     :data:`AMPLIFIED_VALIDATION`) counting as failed (checked for the
     iterates that would be kept: those better than the best so far). With
     ``settings.new_inputs``, the iterate so chosen is kept only if it does
-    not run away on any of them either; else the next one in that order
-    (the one before it, or the next best on the validation signals) that
-    does not, with a warning (the training data are few for the model
-    structure). Each step drops the
+    not run away on any of them either; else an earlier one in that order
+    (back in time, or down the validation ranking) that does not, and the
+    fit reports it (the training data are few for the model structure).
+    Each step drops the
     model's ``n_null_directions`` (parameter directions that leave the
     output unchanged). Pure (nothing is modified), so that several starts
     can run in parallel threads.
@@ -309,7 +309,7 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
     """
     model = start.normalised
     max_iter = settings.max_iter if max_iter is None else max_iter
-    val_history, best = [], {"err": np.inf, "theta": model.theta, "it": 0}
+    val_history, best = [], {"err": np.inf}  # the best validation error so far
     done = 0  # iterations of the earlier stages
     segments = objectives[0].segments
 
@@ -342,8 +342,7 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
         v = validation_error(theta)
         val_history.append(v)
         iterates.append((done + it, theta.copy(), v, cost))
-        if v < best["err"]:
-            best.update(err=v, theta=theta.copy(), it=done + it)
+        best["err"] = min(best["err"], v)
         cost_db = 10 * np.log10(cost / n_res)
         for listener in tuple(_LISTENERS):
             listener(done + it, cost_db)
@@ -402,9 +401,9 @@ def _sane_on_new_inputs(order, bounded_model, new_inputs, period):
     or no iterate passes.
 
     The iterates are probed at 1, 2, 4, ... places down the order, then
-    bisected between the last one that failed and the first that passed
-    (each probe simulates every new input when it passes: checking them all
-    in turn took a (3, 5, 7) Bouc-Wen fit from 23 to 94 s)."""
+    bisected between the last one that failed and the first that passed: a
+    few probes rather than every iterate, as a probe that passes simulates
+    every new input."""
     if not new_inputs:
         return order[0], None
     preferred = bounded_model(order[0][1])
