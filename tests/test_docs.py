@@ -564,6 +564,7 @@ SWEEPS = "bench_f16.py --also-sweeps: f16_sweeps.json"
 NOISE_TEST = "tests/test_pnlss_fitting.py::test_noise_weighting_weighs_each_level_by_its_own_noise"
 STEPS = "bench_step_basis.py: step_basis.json"
 BOUNDED = "bench_bounded.py: bounded.json"
+SMALL_DATA = "bench_small_data.py: small_data.json"
 ACCURACY = "bench_pnlss.py --accuracy: pnlss.json"
 MARGINS = "bench_branch_margins.py: branch_margins.json"
 WITHHELD = "gap_withheld.py: gap_withheld.json"
@@ -576,6 +577,26 @@ def _bounded_row(model, extrapolation="hold"):
             row["new_50N"]["n_diverged"], row["new_50N"]["n_runaway"], row["new_50N"]["db_mean"],
             row["new_60N"]["n_diverged"], row["new_60N"]["n_runaway"], row["new_60N"]["db_mean"],
             row["official_multisine"]["db"], row["official_sweep"]["db"]]
+
+
+def _small_data(route, *keys):
+    """bench_small_data.py's summary of one way to fit: ``keys``, or the
+    counts [signals worse than the linear start, signals, such draws, draws]."""
+    summary = _results("small_data")["summary"][route]
+    keys = keys or ("signals_worse_than_linear", "signals", "draws_worse_than_linear_somewhere", "draws")
+    return [summary[k] for k in keys]
+
+
+def _small_data_worst(route):
+    return max(r["db_worst"] for r in _results("small_data")["rows"] if r["route"] == route)
+
+
+def _small_data_sound_draws(route):
+    """The mean errors of ``route`` on the draws where the unchecked last
+    iterate was worse than the linear start on no new signal."""
+    rows = _results("small_data")["rows"]
+    sound = [r["seed"] for r in rows if r["route"] == "unchecked" and r["n_worse_than_linear"] == 0]
+    return [r["db_mean"] for seed in sound for r in rows if r["route"] == route and r["seed"] == seed]
 
 
 def _grid_best_within_60():
@@ -1049,8 +1070,9 @@ FIGURES = [
                     _f16_sweeps(False)["mean_nrmse"], _f16_sweeps(True)["fit_s"], _f16_sweeps(False)["fit_s"]]),
     Figure(PN, "smoothed over neighbouring bins to 64 degrees of freedom", "sklearn_pnlss/frequency/noise.py",
            lambda: [__import__("sklearn_pnlss.frequency.noise", fromlist=["x"]).SIGNAL_NOISE_DOF]),
-    Figure(PN, "on two simulated levels with 0.2 % and 20 % noise, -54.6 dB on a validation record against "
-              "-33.7 dB pooled and -39.1 dB \"relative\"", NOISE_TEST, lambda: [0.2, 20, None, None, None]),
+    Figure(PN, "on two simulated levels with 0.2 % and 20 % noise, two realisations of eight periods each: "
+              "-58.9 dB on 20 validation records against -47.4 dB pooled and -47.4 dB \"relative\"", NOISE_TEST,
+           lambda: [0.2, 20, None, 20, None, None]),
     Figure(R, "That part alone is an NRMSE of 0.132 in the mean", F16, _f16_floor),
     Figure(R, "causal FIRs of 200 taps fitted on the estimation levels, the in-band part taken exact from the "
               "measurement): nothing above the band leaves 0.133 in the mean", ROUTES,
@@ -1226,6 +1248,27 @@ FIGURES = [
            lambda: [100 * PNLSSRegressor_default("range_margin")]),
     Figure(PN, "amplified 1.2 times", "statespace.fitting.AMPLIFIED_VALIDATION",
            lambda: [importlib.import_module("sklearn_pnlss.statespace.fitting").AMPLIFIED_VALIDATION]),
+    # PNLSS: the check on new realisations of the training inputs (bench_small_data.py)
+    Figure(PN, "kept iterate is simulated on 40 new random-phase realisations", "statespace.new_inputs.N_NEW_INPUTS",
+           lambda: [importlib.import_module("sklearn_pnlss.statespace.new_inputs").N_NEW_INPUTS]),
+    Figure(PN, "PNLSS (3, 5, 7), states, on three realisations of two periods at 55 N, six data draws, 14 new 50 N "
+               "realisations each", SMALL_DATA,
+           lambda: [3, 5, 7, 55, len(_results("small_data")["rows"][0]["db"]), 50]),
+    Figure(PN, "every one scored against the linear start (about -76 dB)", SMALL_DATA,
+           lambda: [statistics.median(r["linear_db_mean"] for r in _results("small_data")["rows"])]),
+    Figure(PN, "the last iterate, unchecked (as before) - 6 of 84 (4 of 6), the worst 32.09 dB - -87.67 dB - 21.6 s",
+           SMALL_DATA, lambda: [*_small_data("unchecked"), _small_data_worst("unchecked"),
+                                *_small_data("unchecked", "median_db_mean", "median_fit_s")]),
+    Figure(PN, "checked (the default) - 0 of 84 (0 of 6) - -95.01 dB - 27.0 s", SMALL_DATA,
+           lambda: [*_small_data("checked"), *_small_data("checked", "median_db_mean", "median_fit_s")]),
+    Figure(PN, "validation on the third realisation, unchecked - 1 of 84 (1 of 6) - -95.73 dB - 40.0 s", SMALL_DATA,
+           lambda: [*_small_data("validation"), *_small_data("validation", "median_db_mean", "median_fit_s")]),
+    Figure(PN, "validation and the check - 0 of 84 (0 of 6) - -94.25 dB - 39.3 s", SMALL_DATA,
+           lambda: [*_small_data("validation_checked"),
+                    *_small_data("validation_checked", "median_db_mean", "median_fit_s")]),
+    Figure(PN, "on those two draws the earlier iterate kept averages -96.45 and -95.31 dB against -97.42 and "
+               "-96.79 dB", SMALL_DATA,
+           lambda: [*_small_data_sound_draws("checked"), *_small_data_sound_draws("unchecked")]),
     # PNLSS: bounded models (bench_bounded.py)
     Figure(PN, "simulated on 20 new noiseless multisine realisations at 50 N rms, 20 at 60 N", BOUNDED,
            lambda: [_results("bounded")["n_new_signals_per_level"], _results("bounded")["levels_N"][0],
