@@ -79,8 +79,8 @@ class StateSpaceRegressorBase(SignalRegressorBase):
             data are then few for the model. A PNLSS (3, 5, 7) Bouc-Wen
             model on three realisations of two periods ran away on one or two
             of 14 new realisations of its level for four of six data draws
-            (errors 12 to 32 dB above 1 m against -76 dB for the linear
-            start), and on none with the check
+            (rms errors of 4 to 40 m, 12 to 32 dB, against -76 dB for the
+            linear start), and on none with the check
             (``benchmarks/bench_small_data.py``).
         time_weight : signals or None, default=None
             Non-negative weight of the squared error at each sample, in the

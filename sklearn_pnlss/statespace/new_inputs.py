@@ -4,8 +4,8 @@ themselves: what a fitted model is checked on before it is returned.
 A model fitted on few realisations can fit them well and still run away on
 the next realisation of the same excitation: Bouc-Wen, PNLSS degrees
 (3, 5, 7) on three realisations of two periods at 55 N, one or two of 14 new
-50 N multisines ended 12 to 32 dB above 1 m of error (the linear start:
--76 dB) for four of six data draws. Such a model leaves the range its
+50 N multisines ended at rms errors of 4 to 40 m (12 to 32 dB; the linear
+start: -76 dB) for four of six data draws. Such a model leaves the range its
 nonlinearity was fitted on; a new random-phase realisation of the training
 spectrum shows it without any new measurement.
 """
