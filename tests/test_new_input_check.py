@@ -8,7 +8,7 @@ import pytest
 
 from sklearn_pnlss import PNLSSRegressor
 from sklearn_pnlss.statespace.new_inputs import random_phase_inputs
-from test_pnlss_fitting import N, _data, _truth
+from test_pnlss_fitting import N, _data, _truth, two_levels
 
 
 def test_random_phase_inputs_keep_the_spectrum_and_the_peak():
@@ -28,23 +28,12 @@ def test_random_phase_inputs_keep_the_spectrum_and_the_peak():
     assert random_phase_inputs(list(X), None) == ()
 
 
-def _few_data():
-    """Two levels, one realisation of four periods each, 0.2 % noise on the
-    quiet one and 20 % on the loud one: the kind of data a fit overfits."""
-    rng = np.random.default_rng(21)
-    truth = _truth(rng)
-    Xq, yq = _data(truth, n_periods=4, n_realizations=1, rms=0.2, seed=1)
-    Xl, yl = _data(truth, n_periods=4, n_realizations=1, rms=0.5, seed=6)
-    yq = yq + 0.002 * yq.std() * rng.standard_normal(yq.shape)
-    yl = yl + 0.2 * yl.std() * rng.standard_normal(yl.shape)
-    return truth, np.concatenate([Xq, Xl]), np.concatenate([yq, yl])
-
-
 def test_a_model_that_runs_away_on_new_realisations_is_not_returned():
     """Unchecked, the last iterate ran away on 17 of 20 new realisations of
     the loud level (errors up to 16 dB above the output's unit scale, the
     validation level 0.35 on 4 of 20); checked, on none of them."""
-    truth, X, y = _few_data()
+    # one realisation of four periods per level: data a fit overfits
+    truth, X, y = two_levels(n_periods=4, n_realizations=1)
     X_new, y_new = _data(truth, n_periods=1, n_realizations=20, seed=100, rms=0.5)
 
     def fitted():

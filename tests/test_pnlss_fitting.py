@@ -39,6 +39,18 @@ def _data(truth, m=1, n_periods=2, n_realizations=2, seed=2, noise=0.0, rms=0.5)
     return X, y + noise * y.std() * rng.standard_normal(y.shape)
 
 
+def two_levels(n_periods, n_realizations):
+    """``truth, X, y``: two levels of a campaign, a quiet one (rms 0.2) with
+    0.2 % noise and a loud one (0.5) with 20 %."""
+    rng = np.random.default_rng(21)
+    truth = _truth(rng)
+    Xq, yq = _data(truth, n_periods=n_periods, n_realizations=n_realizations, rms=0.2, seed=1)
+    Xl, yl = _data(truth, n_periods=n_periods, n_realizations=n_realizations, rms=0.5, seed=6)
+    yq = yq + 0.002 * yq.std() * rng.standard_normal(yq.shape)
+    yl = yl + 0.2 * yl.std() * rng.standard_normal(yl.shape)
+    return truth, np.concatenate([Xq, Xl]), np.concatenate([yq, yl])
+
+
 def test_step_basis_equals_the_svd_of_the_scaled_jacobian():
     rng = np.random.default_rng(0)
     J = rng.standard_normal((500, 8)) * np.logspace(0, 4, 8)
@@ -125,13 +137,7 @@ def test_noise_weighting_weighs_each_level_by_its_own_noise(monkeypatch):
     level has two realisations of eight periods: with one of four, every
     fit ran away on new realisations of the loud level and was taken back
     to its first iterates (-41.8 dB for all three)."""
-    rng = np.random.default_rng(21)
-    truth = _truth(rng)
-    Xq, yq = _data(truth, n_periods=8, n_realizations=2, rms=0.2, seed=1)
-    Xl, yl = _data(truth, n_periods=8, n_realizations=2, rms=0.5, seed=6)
-    yq = yq + 0.002 * yq.std() * rng.standard_normal(yq.shape)
-    yl = yl + 0.2 * yl.std() * rng.standard_normal(yl.shape)
-    X, y = np.concatenate([Xq, Xl]), np.concatenate([yq, yl])
+    truth, X, y = two_levels(n_periods=8, n_realizations=2)
     X_val, y_val = _data(truth, n_periods=1, n_realizations=20, seed=10, rms=0.35)
 
     def error(weighting):
