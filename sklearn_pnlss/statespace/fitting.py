@@ -309,7 +309,7 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
     """
     model = start.normalised
     max_iter = settings.max_iter if max_iter is None else max_iter
-    val_history, best = [], {"err": np.inf}  # the best validation error so far
+    best = {"err": np.inf}  # the best validation error so far
     done = 0  # iterations of the earlier stages
     segments = objectives[0].segments
 
@@ -340,7 +340,6 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
 
     def callback(it, theta, cost, lam):
         v = validation_error(theta)
-        val_history.append(v)
         iterates.append((done + it, theta.copy(), v, cost))
         best["err"] = min(best["err"], v)
         cost_db = 10 * np.log10(cost / n_res)
@@ -378,14 +377,20 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
         order.append(iterates[0])
     else:
         order = iterates[::-1]
-    kept, runaway = _sane_on_new_inputs(
-        order, lambda th: trusted_model(model.with_theta(th), segments, settings, objective),
-        [start.normalise_inputs(U) for U in settings.new_inputs], settings.period)
+    bounded = {}  # iteration -> its model with its trusted range, each built once
+
+    def bounded_model(iterate):
+        if iterate[0] not in bounded:
+            bounded[iterate[0]] = trusted_model(model.with_theta(iterate[1]), segments, settings, objective)
+        return bounded[iterate[0]]
+
+    kept, runaway = _sane_on_new_inputs(order, bounded_model, [start.normalise_inputs(U) for U in settings.new_inputs],
+                                        settings.period)
     return LMFit(
-        model=start.with_normalised(trusted_model(model.with_theta(kept[1]), segments, settings, objective)),
+        model=start.with_normalised(bounded_model(kept)),
         n_iter=done, best_iteration=kept[0],
         cost_history=np.array([h[1] for h in result.history]),
-        validation_history=np.array(val_history) if validation is not None else None,
+        validation_history=np.array([it[2] for it in iterates]) if validation is not None else None,
         validation_error=kept[2] if validation is not None else np.nan,
         kept_cost=kept[3],
         new_input_runaway=runaway,
@@ -394,9 +399,10 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
 
 def _sane_on_new_inputs(order, bounded_model, new_inputs, period):
     """``(kept, runaway)``: the kept iterate, the first of ``order``
-    (``(iteration, theta, validation error, cost)``, most wanted first) whose
-    bounded model does not run away on any of ``new_inputs`` (normalised,
-    one period each), and None when that is the first, else
+    (``(iteration, theta, validation error, cost)``, most wanted first)
+    whose ``bounded_model(iterate)`` does not run away on any of
+    ``new_inputs`` (normalised, one period each), and None when that is the
+    first, else
     :class:`NewInputRunaway`. The first is kept when there are no new inputs
     or no iterate passes.
 
@@ -406,7 +412,7 @@ def _sane_on_new_inputs(order, bounded_model, new_inputs, period):
     every new input."""
     if not new_inputs:
         return order[0], None
-    preferred = bounded_model(order[0][1])
+    preferred = bounded_model(order[0])
     n_first = sum(preferred.runs_away(U, period, max_periods=NEW_INPUT_PERIODS) for U in new_inputs)
     if n_first == 0:
         return order[0], None
@@ -414,7 +420,7 @@ def _sane_on_new_inputs(order, bounded_model, new_inputs, period):
 
     def passes(k):
         if k not in verdicts:
-            cand = bounded_model(order[k][1])
+            cand = bounded_model(order[k])
             verdicts[k] = not any(cand.runs_away(U, period, max_periods=NEW_INPUT_PERIODS) for U in new_inputs)
         return verdicts[k]
 

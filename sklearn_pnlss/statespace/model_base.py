@@ -18,6 +18,9 @@ from ..utils.validation import is_periodic
 # DivergenceError is documented where users import it: sklearn_pnlss.DivergenceError.
 __all__ = ["Segment", "StateSpaceModel", "unbounded"]
 
+# Periods simulated at most in search of a periodic steady state.
+MAX_STEADY_PERIODS = 200
+
 
 def unbounded(k):
     """Bounds ``[-inf, inf]`` for ``k`` variables: no trusted range."""
@@ -154,12 +157,12 @@ class StateSpaceModel:
         """States (N, n) along the simulation from ``x0``."""
         return self._checked_run(U, x0)[1]
 
-    def steady_state_start(self, U_period, max_periods=200, rtol=1e-10):
+    def steady_state_start(self, U_period, max_periods=MAX_STEADY_PERIODS, rtol=1e-10):
         """State at the start of a period once the response is periodic:
         period after period from rest until the state repeats."""
         return self._steady_period(U_period, max_periods, rtol)[0]
 
-    def _steady_period(self, U_period, max_periods=200, rtol=1e-10):
+    def _steady_period(self, U_period, max_periods=MAX_STEADY_PERIODS, rtol=1e-10):
         """``(x, Y, X)``: the state at the start of a period once the
         response is periodic (period after period from rest until the state
         repeats), and the outputs and states of the last period simulated,
@@ -175,7 +178,7 @@ class StateSpaceModel:
             x = x_new
         return x, None, None
 
-    def _steady_run(self, U, period, max_periods=200):
+    def _steady_run(self, U, period, max_periods=MAX_STEADY_PERIODS):
         """Outputs and states of ``U`` in periodic steady state: the
         converged period repeated when ``U`` repeats it, else a simulation
         of ``U`` from the steady-state start (from where ``max_periods``
@@ -194,7 +197,7 @@ class StateSpaceModel:
             return self.simulate(U)[0]
         return self._steady_run(U, period)[0]
 
-    def states_inputs(self, U, period=None, max_periods=200):
+    def states_inputs(self, U, period=None, max_periods=MAX_STEADY_PERIODS):
         """``[x; u]`` (N, n + m) along the simulation of one signal ``U``:
         in periodic steady state when its length is a whole number of
         ``period`` samples (sought over at most ``max_periods``), else from
@@ -216,7 +219,7 @@ class StateSpaceModel:
         return np.vstack([np.hstack([self.simulate_states(seg.U, self.segment_start(seg)), seg.U])
                           for seg in segments])
 
-    def range_excursion(self, U, period=None, max_periods=200):
+    def range_excursion(self, U, period=None, max_periods=MAX_STEADY_PERIODS):
         """How far the simulation of ``U`` (periodic steady state with
         ``period``, sought over at most ``max_periods``) takes the
         nonlinearity's variables past their trusted range: the largest
@@ -232,7 +235,7 @@ class StateSpaceModel:
         excess = excess[np.isfinite(hi - lo)]
         return float(max(excess.max(), 0.0)) if excess.size else 0.0
 
-    def runs_away(self, U, period=None, factor=1.0, max_periods=200):
+    def runs_away(self, U, period=None, factor=1.0, max_periods=MAX_STEADY_PERIODS):
         """Whether the simulation of ``U`` diverges, or takes the
         nonlinearity's variables past their trusted range by more than
         ``factor`` times its width: a bounded model then sits on an orbit it
