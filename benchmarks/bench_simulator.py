@@ -91,13 +91,17 @@ def run(data_dir, repeat):
     print("numba compilation (first call in a fresh interpreter, 256-sample input)")
     with tempfile.TemporaryDirectory() as empty_cache:
         cold = first_call(_FIRST_CALL, empty_cache)
+    with tempfile.TemporaryDirectory() as empty_cache:  # a fresh install's first element of the user's own
+        custom_cold = first_call(_FIRST_CUSTOM_CALL, empty_cache)
     warm = first_call(_FIRST_CALL)
     custom = first_call(_FIRST_CUSTOM_CALL)
-    results["compile"] = {"cold_cache": cold, "warm_cache": warm, "custom_element_warm_cache": custom}
+    results["compile"] = {"cold_cache": cold, "warm_cache": warm, "custom_element_cold_cache": custom_cold,
+                          "custom_element_warm_cache": custom}
     print(f"  cold cache: compile {cold['compile_or_load']:.2f} s "
           f"(first call {cold['first_call']:.2f} s, import {cold['import']:.2f} s)")
     print(f"  warm cache: load    {warm['compile_or_load']:.2f} s "
           f"(first call {warm['first_call']:.2f} s, import {warm['import']:.2f} s)")
+    print(f"  a user's element, cold cache: compile {custom_cold['compile_or_load']:.2f} s")
     print(f"  a user's element, warm cache: compile its function and load {custom['compile_or_load']:.2f} s "
           f"(first call {custom['first_call']:.2f} s)")
 
