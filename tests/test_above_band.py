@@ -56,6 +56,37 @@ def test_a_rattle_above_the_band_is_recovered_on_new_records():
     assert model.score(u_new, y_new) > alone.score(u_new, y_new) + 2.5  # dB: 2.9
 
 
+def _sided_knocks(rng, n):
+    """The rattle of ``_rattle``, but each impact rings the output with the
+    sign of the side the motion knocks on: a gate even in the state and
+    filters linear in the gated force cannot follow it."""
+    u = lfilter([0.1], [1, -0.9], rng.standard_normal(n)) + 0.05 * rng.standard_normal(n)
+    y = lfilter([0.0, 0.1], [1, -0.9], u)
+    knock = np.maximum(y**2 - KNOCK_AT, 0) * np.sign(y) * above_cutoff(u[:, None], CUTOFF, 1.0)[:, 0]
+    return u[:, None], (y + lfilter([0.0, 1.0], [1, 0.5], knock))[:, None]
+
+
+def test_a_network_follows_the_side_the_joint_knocks_on():
+    rng = np.random.default_rng(6)
+    (u, y), (u_new, y_new) = _sided_knocks(rng, 16384), _sided_knocks(rng, 8192)
+    bands = (CUTOFF, 0.51)
+
+    def above(hidden_units, random_state=0):
+        model = AboveBandRegressor(BLAEstimator(2, fs=1.0), cutoff=CUTOFF, n_taps=8, window_stride=1,
+                                   hidden_units=hidden_units, random_state=random_state).fit(u, y)
+        return nrmse_by_band(y_new, model.predict(u_new), fs=1.0, edges=bands)[0, 0], model
+
+    fir, linear = above(None)
+    network, model = above(16)
+    before = nrmse_by_band(y_new, model.regressor_.predict(u_new), fs=1.0, edges=bands)[0, 0]
+    assert fir > 0.95 * before  # the signs cancel in the FIR's fit: 0.0167 -> 0.0170
+    assert network < 0.4 * before  # 0.0055: -9.6 dB above the band
+    assert model.explained_fraction_[0] > 0.8  # 0.89
+    # 4 gate coefficients; 8 FIR taps, or a window of 8 samples of 2 channels into 16 units and out
+    assert (linear.n_map_params_, model.n_map_params_) == (4 + 8, 4 + 8 * 2 * 16 + 16 + 16 + 1)
+    assert above(16)[0] == network  # random_state fixes the network's fit
+
+
 def test_small_motion_leaves_the_gate_shut():
     rng = np.random.default_rng(2)
     u, y = _rattle(rng)

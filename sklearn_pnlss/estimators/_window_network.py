@@ -1,0 +1,59 @@
+"""A one-hidden-layer network on a sliding window of signals: the nonlinear
+map of :class:`~sklearn_pnlss.AboveBandRegressor` (``hidden_units``).
+
+The FIR of the linear map sums the gated input's delays; an impact's
+ringing, though, depends on how hard and in which phase of the motion the
+joint knocks, which no sum of delays holds. The network reads a window of
+the model's in-band prediction and the gated input (every ``stride``-th
+sample of the last ``n_taps``) and gives the error above the cutoff at the
+window's newest sample: ``W2 relu(W1 window + b1) + b2``, fitted by
+scikit-learn's :class:`~sklearn.neural_network.MLPRegressor`. Internal: may
+change without notice.
+"""
+import numpy as np
+from sklearn.neural_network import MLPRegressor
+
+from ._gated import lagged
+
+__all__ = ["apply_network", "fit_network", "windows"]
+
+# Adam's settings: mini-batches of 256 windows; at most 150 passes, stopped
+# when the held-out tenth of the windows has not improved for 10 (the F-16's
+# 262144 training windows stop after 60-150 passes, 2-5 min on 2 cores).
+BATCH_SIZE = 256
+MAX_PASSES = 150
+
+
+def windows(channels, n_taps, stride, periodic):
+    """The network's inputs along one signal (n_samples, n_channels): row
+    ``t`` holds every channel at ``t, t - stride, ...`` back to ``n_taps - 1``
+    samples (circularly for a periodic signal, else from rest), in single
+    precision (the inputs of the whole training set are held at once)."""
+    delays = lagged(channels, n_taps, periodic)[:, :, ::stride]
+    return delays.reshape(channels.shape[0], -1).astype(np.float32)
+
+
+def fit_network(inputs, errors, weights, hidden_units, alpha, random_state):
+    """The network fitted on each signal's windows (``inputs``, from
+    :func:`windows`) against its error above the cutoff, each signal's rows
+    weighted by ``weights``. Returns the network and the scales of its
+    inputs (per column) and outputs (per output): it works in those units."""
+    A = np.vstack(inputs)
+    target = np.vstack(errors)
+    input_scale = A.std(axis=0)
+    input_scale[input_scale == 0] = 1.0
+    target_scale = np.sqrt(np.mean(target**2, axis=0))
+    target_scale[target_scale == 0] = 1.0
+    A /= input_scale
+    rows = np.concatenate([np.full(a.shape[0], w) for a, w in zip(inputs, weights)])
+    network = MLPRegressor(hidden_layer_sizes=(hidden_units,), alpha=alpha, batch_size=BATCH_SIZE,
+                           max_iter=MAX_PASSES, early_stopping=True, random_state=random_state)
+    scaled = (target / target_scale).astype(np.float32)
+    network.fit(A, scaled[:, 0] if scaled.shape[1] == 1 else scaled, sample_weight=rows / rows.mean())
+    return network, input_scale, target_scale
+
+
+def apply_network(network, input_scale, target_scale, window_rows):
+    """The network's output (n_samples, n_outputs) on one signal's windows."""
+    out = network.predict(window_rows / input_scale).reshape(window_rows.shape[0], -1)
+    return out.astype(float) * target_scale
