@@ -170,6 +170,9 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
     0.02 of its mean test NRMSE (the selected one 0.182 to 0.162), all of it
     on the levels where the joint knocks; the lowest test level, where it
     does not, keeps its figures.
+    With ``hidden_units=128`` (``--above-band-network``, an 18-state model,
+    three draws of its starts) the mean takes 0.010 to 0.012 more off,
+    0.150 to 0.138 on the first draw, for 33455 weights instead of 772.
 
     Examples
     --------
