@@ -334,7 +334,7 @@ def entry(name, settings, model, test, fit_s, extra=None):
     return row
 
 
-def above_band(row, model, X, y, test, choose=None, among=()):
+def above_band(row, model, X, y, test, choose=None, among=(), fixed=None):
     """The row of ``model`` (fitted, kept as it is) with its response above
     the excited band: the force's content there gated by the model's state
     (``AboveBandRegressor``, fitted on the training levels); its fit time
@@ -348,12 +348,14 @@ def above_band(row, model, X, y, test, choose=None, among=()):
     force after the time it predicts; such a row is marked ``non_causal``
     and never taken for the best. ``hidden_units``: a network on a window of
     the model's in-band prediction and the gated force takes the filters'
-    place (``NETWORK_SETTINGS``)."""
+    place (``NETWORK_SETTINGS``). One value is taken without held-out fits.
+    ``fixed``: other settings of ``AboveBandRegressor``, named in the row."""
     from sklearn.frozen import FrozenEstimator
 
     from sklearn_pnlss import AboveBandRegressor
 
-    fixed = NETWORK_SETTINGS if choose == "hidden_units" else {}
+    named = fixed or {}
+    fixed = {**(NETWORK_SETTINGS if choose == "hidden_units" else {}), **named}
 
     def wrapped_on(levels, value):
         chosen = {choose: value} if choose else {}
@@ -362,13 +364,13 @@ def above_band(row, model, X, y, test, choose=None, among=()):
 
     t0 = time.perf_counter()
     held_out = {}
-    for value in among:
+    for value in among if len(among) > 1 else ():
         errors = []
         for held in (TRAIN_LEVELS.index(3), TRAIN_LEVELS.index(5)):
             others = [i for i in range(len(TRAIN_LEVELS)) if i != held]
             errors.append(nrmse_of(wrapped_on(others, value).predict(X[held]), y[held]))
         held_out[value] = float(np.mean(errors))
-    value = min(held_out, key=held_out.get) if among else None
+    value = min(held_out, key=held_out.get) if held_out else (among[0] if among else None)
     wrapped = wrapped_on(list(range(len(TRAIN_LEVELS))), value)
     fit_s = row["fit_s"] + time.perf_counter() - t0
     name = row["model"]["estimator"]
@@ -382,11 +384,12 @@ def above_band(row, model, X, y, test, choose=None, among=()):
         settings[choose] = value
         if choose == "n_lead":
             settings["non_causal"] = value > 0
-        print(f"{choose} chosen on held-out levels 3 and 5: {value} (mean NRMSE there: "
-              + ", ".join(f"{k}: {v:.4f}" for k, v in held_out.items()) + ")", flush=True)
         key = "lead" if choose == "n_lead" else choose  # the results files' name since leads came first
-        extra[f"held_out_nrmse_by_{key}"] = {str(k): v for k, v in held_out.items()}
-        suffix = f", {choose}={value}"
+        if held_out:
+            print(f"{choose} chosen on held-out levels 3 and 5: {value} (mean NRMSE there: "
+                  + ", ".join(f"{k}: {v:.4f}" for k, v in held_out.items()) + ")", flush=True)
+            extra[f"held_out_nrmse_by_{key}"] = {str(k): v for k, v in held_out.items()}
+        suffix = f", {choose}={value}" + "".join(f", {k}={v}" for k, v in named.items())
     return entry(f"AboveBandRegressor({name}{suffix})", settings, wrapped, test, fit_s, extra)
 
 
@@ -397,7 +400,8 @@ def above_band_rows(args, row, model, X, y, test):
     if args.above_band_lead:
         rows.append(above_band(row, model, X, y, test, "n_lead", args.above_band_lead))
     if args.above_band_network:
-        rows.append(above_band(row, model, X, y, test, "hidden_units", args.above_band_network))
+        rows.append(above_band(row, model, X, y, test, "hidden_units", args.above_band_network,
+                               {"n_networks": args.networks} if args.networks > 1 else None))
     return rows
 
 
@@ -538,6 +542,8 @@ def main(argv=None):
                         help="also each decoupled model with a network of H hidden units in place of the filters "
                              "(on a window of its in-band prediction and the gated force), H chosen among these "
                              "on held-out levels 3 and 5")
+    parser.add_argument("--networks", type=int, default=1, metavar="K",
+                        help="with --above-band-network: K networks from different starts, averaged")
     parser.add_argument("--output", default=RESULTS / "f16.json")
     args = parser.parse_args(argv)
     args.weighting = None if args.weighting == "none" else args.weighting

@@ -85,6 +85,11 @@ def test_a_network_follows_the_side_the_joint_knocks_on():
     # 4 gate coefficients; 8 FIR taps, or a window of 8 samples of 2 channels into 16 units and out
     assert (linear.n_map_params_, model.n_map_params_) == (4 + 8, 4 + 8 * 2 * 16 + 16 + 16 + 1)
     assert above(16)[0] == network  # random_state fixes the network's fit
+    # two networks from different starts, averaged: their errors partly cancel
+    pair = AboveBandRegressor(BLAEstimator(2, fs=1.0), cutoff=CUTOFF, n_taps=8, window_stride=1, hidden_units=16,
+                              n_networks=2, random_state=0).fit(u, y)
+    assert pair.n_map_params_ == 2 * model.n_map_params_ - 4
+    assert nrmse_by_band(y_new, pair.predict(u_new), fs=1.0, edges=bands)[0, 0] < network
 
 
 def test_small_motion_leaves_the_gate_shut():

@@ -7,15 +7,18 @@ joint knocks, which no sum of delays holds. The network reads a window of
 the model's in-band prediction and the gated input (every ``stride``-th
 sample of the last ``n_taps``) and gives the error above the cutoff at the
 window's newest sample: ``W2 relu(W1 window + b1) + b2``, fitted by
-scikit-learn's :class:`~sklearn.neural_network.MLPRegressor`. Internal: may
-change without notice.
+scikit-learn's :class:`~sklearn.neural_network.MLPRegressor`; several such
+networks from different starts are averaged. Internal: may change without
+notice.
 """
+from numbers import Integral
+
 import numpy as np
 from sklearn.neural_network import MLPRegressor
 
 from ._gated import lagged
 
-__all__ = ["apply_network", "fit_network", "windows"]
+__all__ = ["apply_networks", "fit_networks", "windows"]
 
 # Adam's settings: mini-batches of 256 windows; at most 150 passes, stopped
 # when the held-out tenth of the windows has not improved for 10 (the F-16's
@@ -33,11 +36,13 @@ def windows(channels, n_taps, stride, periodic):
     return delays.reshape(channels.shape[0], -1).astype(np.float32)
 
 
-def fit_network(inputs, errors, weights, hidden_units, alpha, random_state):
-    """The network fitted on each signal's windows (``inputs``, from
-    :func:`windows`) against its error above the cutoff, each signal's rows
-    weighted by ``weights``. Returns the network and the scales of its
-    inputs (per column) and outputs (per output): it works in those units."""
+def fit_networks(inputs, errors, weights, hidden_units, alpha, n_networks, random_state):
+    """``n_networks`` networks fitted on each signal's windows (``inputs``,
+    from :func:`windows`) against its error above the cutoff, each signal's
+    rows weighted by ``weights``, from different initial weights (an int
+    ``random_state`` seeds the k-th with ``random_state + k``). Returns
+    them and the scales of their inputs (per column) and outputs (per
+    output): they work in those units."""
     A = np.vstack(inputs)
     target = np.vstack(errors)
     input_scale = A.std(axis=0)
@@ -46,14 +51,20 @@ def fit_network(inputs, errors, weights, hidden_units, alpha, random_state):
     target_scale[target_scale == 0] = 1.0
     A /= input_scale
     rows = np.concatenate([np.full(a.shape[0], w) for a, w in zip(inputs, weights)])
-    network = MLPRegressor(hidden_layer_sizes=(hidden_units,), alpha=alpha, batch_size=BATCH_SIZE,
-                           max_iter=MAX_PASSES, early_stopping=True, random_state=random_state)
     scaled = (target / target_scale).astype(np.float32)
-    network.fit(A, scaled[:, 0] if scaled.shape[1] == 1 else scaled, sample_weight=rows / rows.mean())
-    return network, input_scale, target_scale
+    scaled = scaled[:, 0] if scaled.shape[1] == 1 else scaled
+    networks = []
+    for k in range(n_networks):
+        seed = random_state + k if isinstance(random_state, Integral) else random_state
+        network = MLPRegressor(hidden_layer_sizes=(hidden_units,), alpha=alpha, batch_size=BATCH_SIZE,
+                               max_iter=MAX_PASSES, early_stopping=True, random_state=seed)
+        networks.append(network.fit(A, scaled, sample_weight=rows / rows.mean()))
+    return networks, input_scale, target_scale
 
 
-def apply_network(network, input_scale, target_scale, window_rows):
-    """The network's output (n_samples, n_outputs) on one signal's windows."""
-    out = network.predict(window_rows / input_scale).reshape(window_rows.shape[0], -1)
+def apply_networks(networks, input_scale, target_scale, window_rows):
+    """The networks' mean output (n_samples, n_outputs) on one signal's
+    windows: their errors, from different starts, partly cancel."""
+    A = window_rows / input_scale
+    out = np.mean([network.predict(A).reshape(window_rows.shape[0], -1) for network in networks], axis=0)
     return out.astype(float) * target_scale

@@ -41,7 +41,7 @@ from ..utils.parameters import Interval, validates_parameters
 from ..utils.validation import restore_layout, signal_layout, validate_signals
 from ._base import DynamicRegressorMixin
 from ._gated import above_cutoff, apply_fir, envelope, fit_fir, fit_gate, gate
-from ._window_network import apply_network, fit_network, windows
+from ._window_network import apply_networks, fit_networks, windows
 from .bla import BLAEstimator
 
 __all__ = ["AboveBandRegressor"]
@@ -124,14 +124,19 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         last ``n_taps`` samples) and gives the output above ``cutoff`` at the
         window's newest sample. Each training signal counts relative to its
         own output power, as the NRMSE scores it. Minutes of fitting on
-        records of 10^5 samples, and ``(n_outputs + n_inputs) * n_taps /
-        window_stride * hidden_units`` weights.
+        records of 10^5 samples, and about ``(n_outputs + n_inputs) *
+        n_taps / window_stride * hidden_units`` weights.
     window_stride : int, default=2
         With ``hidden_units``: the window holds every ``window_stride``-th
         sample.
+    n_networks : int, default=1
+        With ``hidden_units``: so many networks, fitted from different
+        initial weights, are averaged (their errors partly cancel), for as
+        many times the weights and the fitting time.
     random_state : int, RandomState instance or None, default=None
-        With ``hidden_units``: the network's initial weights and the tenth of
-        the windows held out to stop its fit. An int makes the fit
+        With ``hidden_units``: the networks' initial weights and the tenth of
+        the windows held out to stop their fits (an int seeds the k-th
+        network with ``random_state + k``). An int makes the fit
         reproducible.
 
     Attributes
@@ -146,9 +151,9 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
     fir_ : ndarray of shape (n_inputs, n_taps, n_outputs)
         ``fir_[i, j, k]``: from the gated input ``i`` delayed ``j - n_lead``
         samples to output ``k``. Only without ``hidden_units``.
-    network_ : sklearn.neural_network.MLPRegressor
-        The fitted network, in units of its standardised inputs and outputs.
-        Only with ``hidden_units``.
+    networks_ : list of sklearn.neural_network.MLPRegressor
+        The fitted networks, in units of their standardised inputs and
+        outputs. Only with ``hidden_units``.
     network_input_scale_, network_output_scale_ : ndarray
         The standard deviation of each window column on the training signals,
         and the rms of the training error above ``cutoff`` per output: the
@@ -208,11 +213,12 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         "alpha": [Interval(Real, 0, None, closed="left")],
         "hidden_units": [Interval(Integral, 1, None, closed="left"), None],
         "window_stride": [Interval(Integral, 1, None, closed="left")],
+        "n_networks": [Interval(Integral, 1, None, closed="left")],
         "random_state": ["random_state"],
     }
 
     def __init__(self, regressor=None, *, cutoff=None, fs=1.0, n_taps=200, n_lead=0, alpha=1e-4,
-                 hidden_units=None, window_stride=2, random_state=None):
+                 hidden_units=None, window_stride=2, n_networks=1, random_state=None):
         self.regressor = regressor
         self.cutoff = cutoff
         self.fs = fs
@@ -221,6 +227,7 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         self.alpha = alpha
         self.hidden_units = hidden_units
         self.window_stride = window_stride
+        self.n_networks = n_networks
         self.random_state = random_state
 
     @validates_parameters
@@ -273,10 +280,10 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
             # each signal relative to its own output power (in the residual's units), as the NRMSE scores it
             weights = [1.0 / np.mean(np.mean(Y**2, axis=0) / np.maximum(self.above_band_rms_**2, np.finfo(float).tiny))
                        for Y in y_list]
-            self.network_, self.network_input_scale_, self.network_output_scale_ = fit_network(
-                inputs, residual, weights, self.hidden_units, self.alpha, self.random_state)
+            self.networks_, self.network_input_scale_, self.network_output_scale_ = fit_networks(
+                inputs, residual, weights, self.hidden_units, self.alpha, self.n_networks, self.random_state)
             self.n_map_params_ = self.gate_coef_.size + sum(
-                w.size for w in self.network_.coefs_ + self.network_.intercepts_)
+                w.size for network in self.networks_ for w in network.coefs_ + network.intercepts_)
         after = [r - self._above(s) for s, r in zip(signals, residual)]
         before_power = np.maximum(self.above_band_rms_ ** 2, np.finfo(float).tiny)
         self.explained_fraction_ = 1.0 - np.mean(np.vstack(after) ** 2, axis=0) / before_power
@@ -316,8 +323,8 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         """The modelled output above ``cutoff`` along one signal."""
         if self.hidden_units is None:
             return apply_fir(self._gated(signal), self.fir_, signal.periodic)
-        return apply_network(self.network_, self.network_input_scale_, self.network_output_scale_,
-                             self._windows(signal))
+        return apply_networks(self.networks_, self.network_input_scale_, self.network_output_scale_,
+                              self._windows(signal))
 
     def predict(self, X):
         """The regressor's simulation plus the gated response above
