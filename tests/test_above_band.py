@@ -154,32 +154,6 @@ def test_the_f16s_content_above_its_band_follows_the_gated_force(f16_dir):
     np.testing.assert_allclose(above[2][1], above[2][0], atol=0.006)
 
 
-@pytest.mark.slow
-def test_on_the_f16_a_network_follows_the_knocking_further_than_the_filters(f16_dir):
-    """The same linear model of the F-16's four training levels: a network
-    on a window of its in-band prediction and the gated force takes more
-    of the test levels' content above the band than the gated FIRs do,
-    and keeps level 2, where the joint does not knock, near its floor."""
-    from sklearn.frozen import FrozenEstimator
-
-    from sklearn_pnlss.datasets import load_f16
-
-    train = [load_f16(f16_dir, level=lv, validation_level=None) for lv in (1, 3, 5, 7)]
-    X, y = np.concatenate([d.X for d in train]), np.concatenate([d.y for d in train])
-    linear = BLAEstimator(10, period=8192, fs=400.0).fit(X, y)
-    filters = AboveBandRegressor(FrozenEstimator(linear), cutoff=15.5, fs=400.0).fit(X, y)
-    network = AboveBandRegressor(FrozenEstimator(linear), cutoff=15.5, fs=400.0, n_taps=64, window_stride=1,
-                                 hidden_units=128, random_state=0).fit(X, y)
-    above = {}
-    for lv in (2, 4, 6):
-        d = load_f16(f16_dir, level=lv, validation_level=None)
-        above[lv] = [nrmse_by_band(d.y, m.predict(d.X), fs=400.0, edges=(15.5, 200.01))[0] for m in (filters, network)]
-    print({lv: np.round(v, 3).tolist() for lv, v in above.items()})
-    assert np.all(above[6][1] < above[6][0] - 0.02)  # FIRs: 0.128 / 0.093 / 0.303
-    assert np.all(above[4][1] < above[4][0] - 0.01)
-    assert np.all(above[2][1] < 0.04)  # the linear model alone: 0.016 / 0.014 / 0.010
-
-
 def test_a_lead_reads_an_input_that_shows_the_rattle_late():
     """The recorded input carries the rattle's fast content 3 samples after
     it rang the output (a force sensor far from the joint): causal filters
