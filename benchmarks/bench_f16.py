@@ -334,7 +334,7 @@ def entry(name, settings, model, test, fit_s, extra=None):
     return row
 
 
-def above_band(row, model, X, y, test, choose=None, among=(), fixed=None):
+def above_band(row, model, X, y, test, choose=None, among=(), named=None):
     """The row of ``model`` (fitted, kept as it is) with its response above
     the excited band: the force's content there gated by the model's state
     (``AboveBandRegressor``, fitted on the training levels); its fit time
@@ -349,12 +349,12 @@ def above_band(row, model, X, y, test, choose=None, among=(), fixed=None):
     and never taken for the best. ``hidden_units``: a network on a window of
     the model's in-band prediction and the gated force takes the filters'
     place (``NETWORK_SETTINGS``). One value is taken without held-out fits.
-    ``fixed``: other settings of ``AboveBandRegressor``, named in the row."""
+    ``named``: other settings of ``AboveBandRegressor``, named in the row."""
     from sklearn.frozen import FrozenEstimator
 
     from sklearn_pnlss import AboveBandRegressor
 
-    named = fixed or {}
+    named = named or {}
     fixed = {**(NETWORK_SETTINGS if choose == "hidden_units" else {}), **named}
 
     def wrapped_on(levels, value):

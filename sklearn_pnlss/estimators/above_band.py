@@ -271,21 +271,19 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         window = max(1, int(round(self.fs / self.cutoff)))  # one period of the cutoff frequency
         envelopes = [envelope(r, self.above_band_rms_, window, s.periodic) for s, r in zip(signals, residual)]
         self.gate_coef_ = fit_gate([s.states for s in signals], envelopes, self._features)
+        before_power = np.maximum(self.above_band_rms_ ** 2, np.finfo(float).tiny)
+        inputs = [self._map_input(s) for s in signals]
         if self.hidden_units is None:
-            gated = [self._gated(s) for s in signals]
-            self.fir_ = fit_fir(gated, residual, [s.periodic for s in signals], self.n_taps, self.alpha)
+            self.fir_ = fit_fir(inputs, residual, [s.periodic for s in signals], self.n_taps, self.alpha)
             self.n_map_params_ = self.gate_coef_.size + self.fir_.size
         else:
-            inputs = [self._windows(s) for s in signals]
             # each signal relative to its own output power (in the residual's units), as the NRMSE scores it
-            weights = [1.0 / np.mean(np.mean(Y**2, axis=0) / np.maximum(self.above_band_rms_**2, np.finfo(float).tiny))
-                       for Y in y_list]
+            weights = [1.0 / np.mean(np.mean(Y**2, axis=0) / before_power) for Y in y_list]
             self.networks_, self.network_input_scale_, self.network_output_scale_ = fit_networks(
                 inputs, residual, weights, self.hidden_units, self.alpha, self.n_networks, self.random_state)
             self.n_map_params_ = self.gate_coef_.size + sum(
                 w.size for network in self.networks_ for w in network.coefs_ + network.intercepts_)
-        after = [r - self._above(s) for s, r in zip(signals, residual)]
-        before_power = np.maximum(self.above_band_rms_ ** 2, np.finfo(float).tiny)
+        after = [r - self._apply_map(i, s.periodic) for s, i, r in zip(signals, inputs, residual)]
         self.explained_fraction_ = 1.0 - np.mean(np.vstack(after) ** 2, axis=0) / before_power
         return self
 
@@ -313,18 +311,20 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
             return np.roll(w, -self.n_lead, axis=0)
         return np.vstack([w[self.n_lead :], np.zeros((min(self.n_lead, w.shape[0]), w.shape[1]))])
 
-    def _windows(self, signal):
-        """The network's windows along one signal: the prediction below
-        ``cutoff`` beside the gated input."""
+    def _map_input(self, signal):
+        """What the map above ``cutoff`` reads along one signal: the gated
+        input for the FIR filters; for the network, its windows of the
+        prediction below ``cutoff`` beside the gated input."""
+        if self.hidden_units is None:
+            return self._gated(signal)
         below = signal.prediction - above_cutoff(signal.prediction, self.cutoff, self.fs)
         return windows(np.hstack([below, self._gated(signal)]), self.n_taps, self.window_stride, signal.periodic)
 
-    def _above(self, signal):
-        """The modelled output above ``cutoff`` along one signal."""
+    def _apply_map(self, map_input, periodic):
+        """The modelled output above ``cutoff`` from ``_map_input``'s value."""
         if self.hidden_units is None:
-            return apply_fir(self._gated(signal), self.fir_, signal.periodic)
-        return apply_networks(self.networks_, self.network_input_scale_, self.network_output_scale_,
-                              self._windows(signal))
+            return apply_fir(map_input, self.fir_, periodic)
+        return apply_networks(self.networks_, self.network_input_scale_, self.network_output_scale_, map_input)
 
     def predict(self, X):
         """The regressor's simulation plus the gated response above
@@ -343,5 +343,5 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         out = []
         for U in X_list:
             signal = self._signal(U)
-            out.append(signal.prediction + self._above(signal))
+            out.append(signal.prediction + self._apply_map(self._map_input(signal), signal.periodic))
         return restore_layout(out, layout, squeeze_1d=self._y_was_1d)
