@@ -71,9 +71,10 @@ def test_a_network_follows_the_side_the_joint_knocks_on():
     (u, y), (u_new, y_new) = _sided_knocks(rng, 16384), _sided_knocks(rng, 8192)
     bands = (CUTOFF, 0.51)
 
-    def above(hidden_units, n_networks=1):
+    def above(hidden_units, n_networks=1, n_jobs=None):
         model = AboveBandRegressor(BLAEstimator(2, fs=1.0), cutoff=CUTOFF, n_taps=8, window_stride=1,
-                                   hidden_units=hidden_units, n_networks=n_networks, random_state=0).fit(u, y)
+                                   hidden_units=hidden_units, n_networks=n_networks, n_jobs=n_jobs,
+                                   random_state=0).fit(u, y)
         return nrmse_by_band(y_new, model.predict(u_new), fs=1.0, edges=bands)[0, 0], model
 
     fir, linear = above(None)
@@ -86,9 +87,40 @@ def test_a_network_follows_the_side_the_joint_knocks_on():
     assert (linear.n_map_params_, model.n_map_params_) == (4 + 8, 4 + 8 * 2 * 16 + 16 + 16 + 1)
     assert above(16)[0] == network  # random_state fixes the network's fit
     # two networks from different starts, averaged: their errors partly cancel
-    averaged, pair = above(16, n_networks=2)
+    averaged, pair = above(16, n_networks=2, n_jobs=2)
     assert pair.n_map_params_ == 2 * model.n_map_params_ - 4
     assert averaged < network
+    # fitted two at a time, the first is the network fitted alone
+    for a, b in zip(pair.networks_[0].coefs_, model.networks_[0].coefs_):
+        np.testing.assert_array_equal(a, b)
+
+
+def _softening(rng, n):
+    """A slow force and a response that softens in the band (a cubic of the
+    linear response): a linear model of it leaves a distortion there."""
+    u = lfilter([0.1], [1, -0.9], rng.standard_normal(n))
+    s = lfilter([0.0, 0.1], [1, -0.9], u)
+    s /= s.std()
+    return u[:, None], (s - 0.1 * s**3)[:, None]
+
+
+def test_a_network_in_the_band_corrects_the_distortion_the_model_leaves_there():
+    rng = np.random.default_rng(7)
+    (u, y), (u_new, y_new) = _softening(rng, 16384), _softening(rng, 8192)
+    bands = (0.0, CUTOFF)
+
+    def in_band_error(in_band):
+        model = AboveBandRegressor(BLAEstimator(2, fs=1.0), cutoff=CUTOFF, n_taps=8, window_stride=1,
+                                   hidden_units=16, in_band=in_band, random_state=0).fit(u, y)
+        return nrmse_by_band(y_new, model.predict(u_new), fs=1.0, edges=bands)[0, 0], model
+
+    above_only, model = in_band_error(False)
+    corrected, _ = in_band_error(True)
+    alone = nrmse_by_band(y_new, model.regressor_.predict(u_new), fs=1.0, edges=bands)[0, 0]
+    assert above_only == pytest.approx(alone, rel=0.02)  # the band is the model's own: 0.345
+    assert corrected < 0.2 * alone  # 0.046: -17.5 dB in the band on a new record
+    with pytest.raises(ValueError, match="in_band=True needs a network: pass hidden_units"):
+        AboveBandRegressor(BLAEstimator(2, fs=1.0), cutoff=CUTOFF, in_band=True).fit(u, y)
 
 
 def test_small_motion_leaves_the_gate_shut():

@@ -5,7 +5,8 @@ The FIR of the linear map sums the gated input's delays; an impact's
 ringing, though, depends on how hard and in which phase of the motion the
 joint knocks, which no sum of delays holds. The network reads a window of
 the model's in-band prediction and the gated input (every ``stride``-th
-sample of the last ``n_taps``) and gives the error above the cutoff at the
+sample of the last ``n_taps``; with ``in_band``, the input in the band too)
+and gives the error above the cutoff (with ``in_band``, all of it) at the
 window's newest sample: ``W2 relu(W1 window + b1) + b2``, fitted by
 scikit-learn's :class:`~sklearn.neural_network.MLPRegressor`; several such
 networks from different starts are averaged. Internal: may change without
@@ -14,7 +15,9 @@ notice.
 from numbers import Integral
 
 import numpy as np
+from joblib import Parallel, delayed, effective_n_jobs
 from sklearn.neural_network import MLPRegressor
+from sklearn.utils import check_random_state
 
 from ._gated import lagged
 
@@ -36,13 +39,14 @@ def windows(channels, n_taps, stride, periodic):
     return delays.reshape(channels.shape[0], -1).astype(np.float32)
 
 
-def fit_networks(inputs, errors, weights, hidden_units, alpha, n_networks, random_state):
+def fit_networks(inputs, errors, weights, hidden_units, alpha, n_networks, random_state, n_jobs=None):
     """``n_networks`` networks fitted on each signal's windows (``inputs``,
-    from :func:`windows`) against its error above the cutoff, each signal's
+    from :func:`windows`) against the error it models (``errors``), each signal's
     rows weighted by ``weights``, from different initial weights (an int
-    ``random_state`` seeds the k-th with ``random_state + k``). Returns
-    them and the scales of their inputs (per column) and outputs (per
-    output): they work in those units."""
+    ``random_state`` seeds the k-th with ``random_state + k``; otherwise
+    each gets a seed drawn from it here), ``n_jobs`` of them at a time.
+    Returns them and the scales of their inputs (per column) and outputs
+    (per output): they work in those units."""
     A = np.vstack(inputs)
     target = np.vstack(errors)
     input_scale = A.std(axis=0)
@@ -53,13 +57,23 @@ def fit_networks(inputs, errors, weights, hidden_units, alpha, n_networks, rando
     rows = np.concatenate([np.full(a.shape[0], w) for a, w in zip(inputs, weights)])
     scaled = (target / target_scale).astype(np.float32)
     scaled = scaled[:, 0] if scaled.shape[1] == 1 else scaled
-    networks = []
-    for k in range(n_networks):
-        seed = random_state + k if isinstance(random_state, Integral) else random_state
-        network = MLPRegressor(hidden_layer_sizes=(hidden_units,), alpha=alpha, batch_size=BATCH_SIZE,
-                               max_iter=MAX_PASSES, early_stopping=True, random_state=seed)
-        networks.append(network.fit(A, scaled, sample_weight=rows / rows.mean()))
+    if isinstance(random_state, Integral):
+        seeds = [random_state + k for k in range(n_networks)]
+    else:
+        # drawn here, not in the workers: each would get its own copy of a
+        # generator and draw the same initial weights
+        rng = check_random_state(random_state)
+        seeds = [int(rng.randint(np.iinfo(np.int32).max)) for _ in range(n_networks)]
+    # one network alone is fitted here, with every core for its products
+    networks = Parallel(n_jobs=min(effective_n_jobs(n_jobs), n_networks))(
+        delayed(_fit_network)(A, scaled, rows / rows.mean(), hidden_units, alpha, seed) for seed in seeds)
     return networks, input_scale, target_scale
+
+
+def _fit_network(A, target, sample_weight, hidden_units, alpha, seed):
+    network = MLPRegressor(hidden_layer_sizes=(hidden_units,), alpha=alpha, batch_size=BATCH_SIZE,
+                           max_iter=MAX_PASSES, early_stopping=True, random_state=seed)
+    return network.fit(A, target, sample_weight=sample_weight)
 
 
 def apply_networks(networks, input_scale, target_scale, window_rows):

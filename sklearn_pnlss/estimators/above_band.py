@@ -28,7 +28,10 @@ linear least squares on top of the fitted state-space model.
 How an impact rings the structure depends on how hard and in which phase
 of the motion the joint knocks, which no sum of the gated force's delays
 holds: with ``hidden_units``, a one-hidden-layer network on a window of the
-model's in-band prediction and the gated force takes the FIR's place.
+model's in-band prediction and the gated force takes the FIR's place. With
+``in_band`` it reads the input in the band as well and models the model's
+whole error: what the state-space model leaves in the band, a map of its
+own simulation and the input corrects.
 """
 from numbers import Integral, Real
 from typing import NamedTuple
@@ -55,12 +58,14 @@ def quadratic_features(x):
 
 class _Signal(NamedTuple):
     """One input signal as the model sees it: the regressor's prediction,
-    its states (normalised units), the input's content above the cutoff,
-    and whether the signal is periodic (steady state, circular FIRs)."""
+    its states (normalised units), the input's content above and below the
+    cutoff, and whether the signal is periodic (steady state, circular
+    FIRs)."""
 
     prediction: np.ndarray
     states: np.ndarray
     input_above: np.ndarray
+    input_below: np.ndarray
     periodic: bool
 
 
@@ -126,6 +131,13 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         own output power, as the NRMSE scores it. Minutes of fitting on
         records of 10^5 samples, and about ``(n_outputs + n_inputs) *
         n_taps / window_stride * hidden_units`` weights.
+    in_band : bool, default=False
+        With ``hidden_units``: the network models the regressor's error in
+        the band as well, reading the input below ``cutoff`` beside its
+        window. What the state-space model leaves in the band (a distortion
+        its polynomial does not hold, its fit's compromise between the
+        training levels) is then corrected by a map of its own simulation and
+        the input: the model stays a simulator of a new input.
     window_stride : int, default=2
         With ``hidden_units``: the window holds every ``window_stride``-th
         sample.
@@ -133,11 +145,15 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         With ``hidden_units``: so many networks, fitted from different
         initial weights, are averaged (their errors partly cancel), for as
         many times the weights and the fitting time.
+    n_jobs : int or None, default=None
+        With ``n_networks`` above 1: how many networks are fitted at a time
+        (joblib's convention: None one, -1 as many as there are cores).
     random_state : int, RandomState instance or None, default=None
         With ``hidden_units``: the networks' initial weights and the tenth of
         the windows held out to stop their fits (an int seeds the k-th
-        network with ``random_state + k``). An int makes the fit
-        reproducible.
+        network with ``random_state + k``; otherwise each network's seed is
+        drawn from it). An int makes the fit reproducible, whatever
+        ``n_jobs``.
 
     Attributes
     ----------
@@ -156,16 +172,16 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         outputs. Only with ``hidden_units``.
     network_input_scale_, network_output_scale_ : ndarray
         The standard deviation of each window column on the training signals,
-        and the rms of the training error above ``cutoff`` per output: the
-        network's units.
+        and the rms of the training error above ``cutoff`` (all of it with
+        ``in_band``) per output: the network's units.
         Only with ``hidden_units``.
     n_map_params_ : int
         The coefficients of the gate and of the FIR filters or the network.
     above_band_rms_ : ndarray of shape (n_outputs,)
         The rms of the regressor's training error above ``cutoff``.
     explained_fraction_ : ndarray of shape (n_outputs,)
-        The share of that error's power the gated FIR explains on the
-        training signals.
+        The share of that error's power (of the whole error with
+        ``in_band``) the map explains on the training signals.
     n_features_in_, n_outputs_ : int
 
     Notes
@@ -212,13 +228,15 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         "n_lead": [Interval(Integral, 0, None, closed="left")],
         "alpha": [Interval(Real, 0, None, closed="left")],
         "hidden_units": [Interval(Integral, 1, None, closed="left"), None],
+        "in_band": ["boolean"],
         "window_stride": [Interval(Integral, 1, None, closed="left")],
         "n_networks": [Interval(Integral, 1, None, closed="left")],
+        "n_jobs": [Integral, None],
         "random_state": ["random_state"],
     }
 
     def __init__(self, regressor=None, *, cutoff=None, fs=1.0, n_taps=200, n_lead=0, alpha=1e-4,
-                 hidden_units=None, window_stride=2, n_networks=1, random_state=None):
+                 hidden_units=None, in_band=False, window_stride=2, n_networks=1, n_jobs=None, random_state=None):
         self.regressor = regressor
         self.cutoff = cutoff
         self.fs = fs
@@ -226,8 +244,10 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         self.n_lead = n_lead
         self.alpha = alpha
         self.hidden_units = hidden_units
+        self.in_band = in_band
         self.window_stride = window_stride
         self.n_networks = n_networks
+        self.n_jobs = n_jobs
         self.random_state = random_state
 
     @validates_parameters
@@ -257,6 +277,9 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         if self.n_lead >= self.n_taps:
             raise ValueError(f"n_lead={self.n_lead} must be below n_taps={self.n_taps}: the filters reach from "
                              "n_lead samples ahead to n_taps - n_lead - 1 behind. Lower n_lead or raise n_taps.")
+        if self.in_band and self.hidden_units is None:
+            raise ValueError("in_band=True needs a network: pass hidden_units (e.g. 128), or in_band=False for "
+                             "the FIR filters above the band.")
         X_list, y_list, _ = validate_signals(self, X, y, reset=True)
         self.regressor_ = clone(self.regressor) if self.regressor is not None else BLAEstimator()
         self.regressor_.fit(X, y, **fit_params)
@@ -279,8 +302,12 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         else:
             # each signal relative to its own output power (in the residual's units), as the NRMSE scores it
             weights = [1.0 / np.mean(np.mean(Y**2, axis=0) / before_power) for Y in y_list]
+            if self.in_band:
+                residual = [Y - s.prediction for s, Y in zip(signals, y_list)]
+                before_power = np.maximum(np.mean(np.vstack(residual) ** 2, axis=0), np.finfo(float).tiny)
             self.networks_, self.network_input_scale_, self.network_output_scale_ = fit_networks(
-                inputs, residual, weights, self.hidden_units, self.alpha, self.n_networks, self.random_state)
+                inputs, residual, weights, self.hidden_units, self.alpha, self.n_networks, self.random_state,
+                self.n_jobs)
             self.n_map_params_ = self.gate_coef_.size + sum(
                 w.size for network in self.networks_ for w in network.coefs_ + network.intercepts_)
         after = [r - self._apply_map(i, s.periodic) for s, i, r in zip(signals, inputs, residual)]
@@ -293,7 +320,8 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         periodic = step._signal_is_periodic(U.shape[0])
         prediction = np.asarray(self.regressor_.predict(U)).reshape(U.shape[0], -1)
         states = step.model_.normalised_trajectory([U], step._period() if periodic else None)[:, :-U.shape[1]]
-        return _Signal(prediction, states, above_cutoff(U, self.cutoff, self.fs), periodic)
+        input_above = above_cutoff(U, self.cutoff, self.fs)
+        return _Signal(prediction, states, input_above, U - input_above, periodic)
 
     def _features(self, x):
         """The gate's features: the scaled states' quadratic form."""
@@ -318,7 +346,8 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         if self.hidden_units is None:
             return self._gated(signal)
         below = signal.prediction - above_cutoff(signal.prediction, self.cutoff, self.fs)
-        return windows(np.hstack([below, self._gated(signal)]), self.n_taps, self.window_stride, signal.periodic)
+        channels = [below, self._gated(signal)] + ([signal.input_below] if self.in_band else [])
+        return windows(np.hstack(channels), self.n_taps, self.window_stride, signal.periodic)
 
     def _apply_map(self, map_input, periodic):
         """The modelled output above ``cutoff`` from ``_map_input``'s value."""
