@@ -117,7 +117,7 @@ FORCE_MAP_TAPS = 300
 # The window was set by exploratory runs scored on the test levels (longer
 # or sparser windows did no better and fitted slower); the hidden units are
 # chosen on held-out estimation levels.
-NETWORK_SETTINGS = {"n_taps": 64, "window_stride": 1, "random_state": 0}
+NETWORK_SETTINGS = {"n_taps": 64, "window_stride": 1, "n_jobs": 2, "random_state": 0}
 # What --select chooses from: the branch count, and polynomial branches
 # (None) or cubic splines on so many knots.
 SELECT_BRANCHES = (3, 6)
@@ -399,9 +399,9 @@ def above_band_rows(args, row, model, X, y, test):
     rows = [above_band(row, model, X, y, test)] if args.above_band else []
     if args.above_band_lead:
         rows.append(above_band(row, model, X, y, test, "n_lead", args.above_band_lead))
-    if args.above_band_network:
-        rows.append(above_band(row, model, X, y, test, "hidden_units", args.above_band_network,
-                               {"n_networks": args.networks} if args.networks > 1 else None))
+    for k in args.networks if args.above_band_network else ():
+        named = {**({"n_networks": k} if k > 1 else {}), **({"in_band": True} if args.in_band else {})}
+        rows.append(above_band(row, model, X, y, test, "hidden_units", args.above_band_network, named))
     return rows
 
 
@@ -542,8 +542,12 @@ def main(argv=None):
                         help="also each decoupled model with a network of H hidden units in place of the filters "
                              "(on a window of its in-band prediction and the gated force), H chosen among these "
                              "on held-out levels 3 and 5")
-    parser.add_argument("--networks", type=int, default=1, metavar="K",
-                        help="with --above-band-network: K networks from different starts, averaged")
+    parser.add_argument("--networks", type=int, nargs="+", default=[1], metavar="K",
+                        help="with --above-band-network: K networks from different starts, averaged (a row "
+                             "for each K given)")
+    parser.add_argument("--in-band", action="store_true",
+                        help="with --above-band-network: the networks model the error in the band as well "
+                             "(AboveBandRegressor(in_band=True))")
     parser.add_argument("--output", default=RESULTS / "f16.json")
     args = parser.parse_args(argv)
     args.weighting = None if args.weighting == "none" else args.weighting
