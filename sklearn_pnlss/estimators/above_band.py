@@ -302,7 +302,8 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
             self.fir_ = fit_fir(inputs, residual, [s.periodic for s in signals], self.n_taps, self.alpha)
             self.n_map_params_ = self.gate_coef_.size + self.fir_.size
         else:
-            # each signal relative to its own output power (in the residual's units), as the NRMSE scores it
+            # each signal relative to its own output power, as the NRMSE scores it (the outputs in units of the
+            # error above the cutoff, with in_band too)
             weights = [1.0 / np.mean(np.mean(Y**2, axis=0) / before_power) for Y in y_list]
             if self.in_band:
                 residual = [Y - s.prediction for s, Y in zip(signals, y_list)]
