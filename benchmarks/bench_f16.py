@@ -315,10 +315,26 @@ def force_above_band(model, X, y, test, taps=FORCE_MAP_TAPS):
     return out
 
 
+# The test levels' sine sweeps, set by main: every level's multisine is one
+# waveform at another amplitude (its force correlates at 0.99 from level 2
+# to 7), so the test multisines show how a model interpolates in amplitude;
+# the sweeps, another waveform, how it simulates an input it has not seen.
+TEST_SWEEPS = {}
+
+
+def nrmse_new_waveform(model):
+    """{level: [per output]} and the mean on the test levels' sine sweeps,
+    each simulated from rest (the first 50 samples left out)."""
+    per_level = {str(lv): nrmse_of(model.predict(d.X[0])[50:], d.y[0, 50:]).tolist() for lv, d in TEST_SWEEPS.items()}
+    return per_level, float(np.mean([v for row in per_level.values() for v in row]))
+
+
 def entry(name, settings, model, test, fit_s, extra=None):
     per_level, mean, by_band = nrmse(model, test)
+    sweep_levels, sweep_mean = nrmse_new_waveform(model)
     row = {"model": {"estimator": name, **settings}, "mean_nrmse": mean, "nrmse": per_level,
            "nrmse_by_band": by_band, "band_edges_hz": list(BAND_EDGES),
+           "mean_nrmse_sweeps": sweep_mean, "nrmse_sweeps": sweep_levels,
            "mean_nrmse_official": nrmse_official(model, test), "fit_s": fit_s,
            "peak_memory_mb": peak_memory_mb(), "n_params": int(getattr(model, "n_params_", 0)),
            "n_nonlinear_params": int(getattr(model, "n_nonlinear_params_", 0))}
@@ -331,6 +347,8 @@ def entry(name, settings, model, test, fit_s, extra=None):
     above = "  ".join(f"L{lv} " + "/".join(f"{np.sqrt(np.sum(np.square(by_band[str(lv)][1:]), axis=0))[k]:.3f}"
                                           for k in range(3)) for lv in TEST_LEVELS)
     print(f"{'':34s} of which above the excited band (> {BAND_EDGES[1]} Hz):  {above}", flush=True)
+    sweeps = "  ".join(f"L{lv} " + "/".join(f"{v:.3f}" for v in sweep_levels[str(lv)]) for lv in TEST_LEVELS)
+    print(f"{'':34s} on the test levels' sine sweeps (a new waveform): mean {sweep_mean:.3f}  {sweeps}", flush=True)
     return row
 
 
@@ -557,6 +575,8 @@ def main(argv=None):
     from sklearn_pnlss.datasets import load_f16
 
     X, y, test = load(args.data_dir)
+    TEST_SWEEPS.update({lv: load_f16(args.data_dir, level=lv, kind="sinesweep", validation_level=None)
+                        for lv in TEST_LEVELS})
     n = args.states
     print(f"F-16: training {X.shape} (levels {TRAIN_LEVELS}), test levels {TEST_LEVELS}, {n} states", flush=True)
     results = header()

@@ -372,23 +372,14 @@ def _f16_led():
     return next(r for r in _results("f16_lead")["models"] if r["model"].get("n_lead"))
 
 
-def _f16_net(seed=0, network=True):
-    """A decoupled model of 18 states (draw ``seed``) with its response
-    above the band, through the network or the filters (bench_f16.py
-    --above-band-network: f16_network.json)."""
-    f16 = _results("f16_network")
-    name = "DecoupledPNLSSRegressor(18, 3, 3) random" + (f", random_state={seed}" if seed else "")
-    name = f"AboveBandRegressor({name}" + (", hidden_units=" if network else ")")
-    return next(r for r in f16["models"] + f16["draws"] if r["model"]["estimator"].startswith(name))
-
-
-def _f16_nets(seed=0, n_networks=1, results="f16_in_band"):
+def _f16_nets(seed=0, n_networks=1):
     """The 18-state decoupled model (draw ``seed``) with ``n_networks``
-    averaged networks: modelling its whole error (bench_f16.py --in-band:
-    f16_in_band.json) or above the band only (--networks 5:
-    f16_networks.json)."""
-    f16 = _results(results)
+    averaged networks modelling its whole error, or alone with
+    ``n_networks=0`` (bench_f16.py --in-band: f16_in_band.json)."""
+    f16 = _results("f16_in_band")
     name = "DecoupledPNLSSRegressor(18, 3, 3) random" + (f", random_state={seed}" if seed else "")
+    if n_networks == 0:
+        return next(r for r in f16["models"] + f16["draws"] if r["model"]["estimator"] == name)
     return next(r for r in f16["models"] + f16["draws"]
                 if r["model"]["estimator"].startswith(f"AboveBandRegressor({name}, hidden_units=")
                 and r["model"].get("n_networks", 1) == n_networks)
@@ -581,9 +572,8 @@ GRID_60 = "bench_decoupled_grid.py --seed 0..9 --max-params 60: decoupled_grid_6
 INIT = "bench_decoupled_init.py: decoupled_init.json"
 F16 = "bench_f16.py: f16.json"
 LEAD = "bench_f16.py --above-band-lead: f16_lead.json"
-NETWORK = "bench_f16.py --above-band-network: f16_network.json"
 IN_BAND = "bench_f16.py --above-band-network 128 --networks 1 3 --in-band: f16_in_band.json"
-NETWORKS = "bench_f16.py --above-band-network 128 --networks 5: f16_networks.json"
+SAME_WAVEFORM = "tests/test_above_band.py::test_on_the_f16_a_network_takes_what_the_linear_model_leaves_in_the_band"
 WEIGHTING = "bench_f16.py --also-weighting noise: f16_weighting.json"
 SWEEPS = "bench_f16.py --also-sweeps: f16_sweeps.json"
 NOISE_TEST = "tests/test_pnlss_fitting.py::test_noise_weighting_weighs_each_level_by_its_own_noise"
@@ -1117,50 +1107,32 @@ FIGURES = [
                     *map(int, _f16_led()["held_out_nrmse_by_lead"]), 3, 5,
                     *_f16_led()["held_out_nrmse_by_lead"].values(), _f16_led()["mean_nrmse"],
                     6, *_f16_led()["nrmse"]["6"], _f16_lru_level_6()[2]]),
-    Figure(R, "(`AboveBandRegressor(hidden_units=128)`: one hidden layer of 128 rectified units reading the last 64 "
-              "samples, 0.16 s, of the model's prediction in the band and of the gated force; the unit count chosen "
-              "among 128 and 256 on held-out estimation levels 3 and 5, 0.118 and 0.119 there)", NETWORK,
-           lambda: [_f16_net()["model"]["hidden_units"], _f16_net()["model"]["hidden_units"],
-                    _f16_net()["model"]["n_taps"], _f16_net()["model"]["n_taps"] / 400,
-                    *map(int, _f16_net()["held_out_nrmse_by_hidden_units"]), 3, 5,
-                    *_f16_net()["held_out_nrmse_by_hidden_units"].values()]),
-    Figure(R, "the 18-state model goes from 0.150 with the filters to 0.138 in the mean, level 6 from 0.132 / 0.119 / "
-              "0.298 to 0.111 / 0.106 / 0.257 (the deep LRU: 0.134 / 0.099 / 0.237), and the other two draws of its "
-              "starts from 0.165 to 0.155 and from 0.158 to 0.145", NETWORK,
-           lambda: [18, _f16_net(network=False)["mean_nrmse"], _f16_net()["mean_nrmse"], 6,
-                    *_f16_net(network=False)["nrmse"]["6"], *_f16_net()["nrmse"]["6"], *_f16_lru_level_6(),
-                    _f16_net(1, False)["mean_nrmse"], _f16_net(1)["mean_nrmse"],
-                    _f16_net(2, False)["mean_nrmse"], _f16_net(2)["mean_nrmse"]]),
-    Figure(R, "It costs 33455 weights where the filters have 772, and 680 s of fitting in all (the choice of the unit "
-              "count included) against 223 s; simulated from rest over the whole test records, as the official "
-              "loader scores, the mean is 0.158. The payload's level 2 loses a little (0.101 to 0.110).",
-           NETWORK,
-           lambda: [_f16_net()["n_above_band_params"], _f16_net(network=False)["n_above_band_params"],
-                    _f16_net()["fit_s"], _f16_net(network=False)["fit_s"], _f16_net()["mean_nrmse_official"], 2,
-                    _f16_net(network=False)["nrmse"]["2"][2], _f16_net()["nrmse"]["2"][2]]),
-    Figure(R, "Five such networks averaged (`n_networks=5`, `--networks 5`, `benchmarks/results/f16_networks.json`) "
-              "give 0.135, 0.149 and 0.138 on the three draws, in 760 to 817 s.", NETWORKS,
-           lambda: [5, 5, *[_f16_nets(k, 5, "f16_networks")["mean_nrmse"] for k in range(3)],
-                    min(_f16_nets(k, 5, "f16_networks")["fit_s"] for k in range(3)),
-                    max(_f16_nets(k, 5, "f16_networks")["fit_s"] for k in range(3))]),
-    Figure(R, "`--in-band`, `benchmarks/results/f16_in_band.json`: 41647 weights)", IN_BAND,
-           lambda: [_f16_nets()["n_above_band_params"]]),
-    Figure(R, "One network brings the 18-state model to 0.131 in the mean, in 426 s of fitting in all; three averaged "
-              "(`n_networks=3`, fitted two at a time with `n_jobs=2`: 124597 weights) to **0.125** in 529 s, level 6 "
-              "at 0.096 / 0.097 / 0.241 (the deep LRU: 0.134 / 0.099 / 0.237) and level 2 at 0.068 / 0.089 / 0.091. "
-              "The other two draws of its starts reach 0.152 and 0.141 with one network, 0.143 and 0.134 with three, "
-              "in 413 and 415 s:", IN_BAND,
-           lambda: [18, _f16_nets()["mean_nrmse"], _f16_nets()["fit_s"], _f16_nets(0, 3)["model"]["n_networks"],
-                    _f16_nets(0, 3)["model"]["n_jobs"], _f16_nets(0, 3)["n_above_band_params"],
-                    _f16_nets(0, 3)["mean_nrmse"], _f16_nets(0, 3)["fit_s"], 6, *_f16_nets(0, 3)["nrmse"]["6"],
-                    *_f16_lru_level_6(), 2, *_f16_nets(0, 3)["nrmse"]["2"],
-                    _f16_nets(1)["mean_nrmse"], _f16_nets(2)["mean_nrmse"],
-                    _f16_nets(1, 3)["mean_nrmse"], _f16_nets(2, 3)["mean_nrmse"],
-                    _f16_nets(1, 3)["fit_s"], _f16_nets(2, 3)["fit_s"]]),
-    Figure(R, "the payload's level 6 stays above the deep LRU's (0.241, 0.265 and 0.243 with three networks)", IN_BAND,
-           lambda: [6, *[_f16_nets(k, 3)["nrmse"]["6"][2] for k in range(3)]]),
-    Figure(R, "as the official loader scores, three networks give 0.147 on the first draw", IN_BAND,
-           lambda: [_f16_nets(0, 3)["mean_nrmse_official"]]),
+    Figure(R, "`AboveBandRegressor(hidden_units=128, in_band=True)` reads the last 64 samples (0.16 s) of the "
+              "model's simulation in the band, of the gated force and of the force in the band, and gives the model's "
+              "whole error at the window's newest sample (41647 weights)", IN_BAND,
+           lambda: [_f16_nets()["model"]["hidden_units"], _f16_nets()["model"]["n_taps"],
+                    _f16_nets()["model"]["n_taps"] / 400, _f16_nets()["n_above_band_params"]]),
+    Figure(R, "(the forces of any two levels from 2 to 7 correlate at 0.99)", SAME_WAVEFORM, lambda: [2, 7, None]),
+    Figure(R, "one network brings the 18-state model from 0.179 to 0.155 in the mean on the test multisines and from "
+              "0.240 to 0.227 on the sweeps, in 215 s of fitting in all; the other two draws of its starts go from "
+              "0.187 to 0.163 and from 0.181 to 0.154 (sweeps: 0.246 to 0.235, 0.280 to 0.269)", IN_BAND,
+           lambda: [18, _f16_nets(0, 0)["mean_nrmse"], _f16_nets()["mean_nrmse"], _f16_nets(0, 0)["mean_nrmse_sweeps"],
+                    _f16_nets()["mean_nrmse_sweeps"], _f16_nets()["fit_s"],
+                    *[_f16_nets(k, n)["mean_nrmse"] for k in (1, 2) for n in (0, 1)],
+                    *[_f16_nets(k, n)["mean_nrmse_sweeps"] for k in (1, 2) for n in (0, 1)]]),
+    Figure(R, "Three networks averaged (`n_networks=3`, 124597 weights) add little: 0.153, 0.161 and 0.154, level 6 "
+              "of the first draw at 0.119 / 0.111 / 0.277 against the deep LRU's 0.134 / 0.099 / 0.237; simulated "
+              "from rest over the whole test records, as the official loader scores, 0.169.", IN_BAND,
+           lambda: [_f16_nets(0, 3)["model"]["n_networks"], _f16_nets(0, 3)["n_above_band_params"],
+                    *[_f16_nets(k, 3)["mean_nrmse"] for k in range(3)], 6, *_f16_nets(0, 3)["nrmse"]["6"],
+                    *_f16_lru_level_6(), _f16_nets(0, 3)["mean_nrmse_official"]]),
+    Figure(PN, "On the F-16 one such network takes 0.023 to 0.027 off the mean test NRMSE of each of three draws of "
+               "the decoupled model's starts, and 0.011 to 0.013 off its mean on the test levels' sine sweeps",
+           IN_BAND,
+           lambda: [16, min(_f16_nets(k, 0)["mean_nrmse"] - _f16_nets(k)["mean_nrmse"] for k in range(3)),
+                    max(_f16_nets(k, 0)["mean_nrmse"] - _f16_nets(k)["mean_nrmse"] for k in range(3)),
+                    min(_f16_nets(k, 0)["mean_nrmse_sweeps"] - _f16_nets(k)["mean_nrmse_sweeps"] for k in range(3)),
+                    max(_f16_nets(k, 0)["mean_nrmse_sweeps"] - _f16_nets(k)["mean_nrmse_sweeps"] for k in range(3))]),
     Figure(R, "an NRMSE of 0.050 in the mean and 0.071 / 0.044 / 0.122 on level 6", F16,
            lambda: [*_f16_floor(key="non_periodic_floor"), *_f16_floor(6, "non_periodic_floor"), 6]),
     Figure(R, "a causal FIR of 300 taps fitted on the training levels' residual) brings level 6 to 0.123 / 0.111 / "
@@ -1183,17 +1155,6 @@ FIGURES = [
                                                            "DecoupledPNLSSRegressor(18, 3, 3) random",
                                                            _f16_above("DecoupledPNLSSRegressor(18, 3, 3) random")))]),
     Figure(PN, "alone is an NRMSE of 0.132 in the mean", F16, _f16_floor),
-    Figure(PN, "On the F-16 it takes 0.010 to 0.012 more off the mean test NRMSE than the filters, on each of three "
-               "draws of the decoupled model's starts, for 33455 weights", NETWORK,
-           lambda: [16, min(_f16_net(k, False)["mean_nrmse"] - _f16_net(k)["mean_nrmse"] for k in range(3)),
-                    max(_f16_net(k, False)["mean_nrmse"] - _f16_net(k)["mean_nrmse"] for k in range(3)),
-                    _f16_net()["n_above_band_params"]]),
-    Figure(PN, "On the F-16 this takes a further 0.003 to 0.007 off the mean test NRMSE with one network, on each of "
-               "three draws of the decoupled model's starts, and three averaged networks reach 0.125 on the first draw",
-           IN_BAND,
-           lambda: [16, min(_f16_net(k)["mean_nrmse"] - _f16_nets(k)["mean_nrmse"] for k in range(3)),
-                    max(_f16_net(k)["mean_nrmse"] - _f16_nets(k)["mean_nrmse"] for k in range(3)),
-                    _f16_nets(0, 3)["mean_nrmse"]]),
     Figure(PN, "test level 2 to level 6 that grows 32-fold, the accelerations above the band 304- to 7415-fold", F16,
            lambda: [*_f16_force("growth_levels"), _f16_force("force_power_growth_above"),
                     min(_f16_force("output_power_growth_above")), max(_f16_force("output_power_growth_above"))]),
