@@ -70,7 +70,8 @@ def fit_networks(inputs, errors, weights, held_out, hidden_units, alpha, n_netwo
         seeds = [int(rng.randint(np.iinfo(np.int32).max)) for _ in range(n_networks)]
     # one network alone is fitted here, with every core for its products
     networks = Parallel(n_jobs=min(effective_n_jobs(n_jobs), n_networks))(
-        delayed(_fit_network)(A, scaled, rows / rows.mean(), np.concatenate(held_out), hidden_units, alpha, seed) for seed in seeds)
+        delayed(_fit_network)(A, scaled, rows / rows.mean(), np.concatenate(held_out), hidden_units, alpha, seed)
+        for seed in seeds)
     return networks, input_scale, target_scale
 
 
@@ -105,7 +106,8 @@ def _fit_network(A, target, sample_weight, held_out, hidden_units, alpha, seed):
             stale += 1
             if stale >= PATIENCE:
                 break
-    network.coefs_, network.intercepts_ = best
+    if best is not None:  # else no pass gave a finite held-out error: the last weights stay
+        network.coefs_, network.intercepts_ = best
     return network
 
 
