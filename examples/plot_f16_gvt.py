@@ -231,7 +231,9 @@ if train is not None:
 #   (``AboveBandRegressor(hidden_units=128, in_band=True)``), takes about
 #   0.025 off the mean, to 0.155 on one draw of the decoupled model's
 #   starts, but leaves the payload's level 6 far above the deep LRU's
-#   figure (``benchmarks/results/f16_in_band.json``). Fitted on until it
+#   figure, and on the sine sweeps, a force the fit never saw, it does no
+#   better than the gated filters (``benchmarks/results/f16_in_band.json``).
+#   Fitted on until it
 #   had learnt the training levels' one waveform by heart, it did better on
 #   the test multisines, which are that waveform too, and worse on the
 #   sine sweeps: it now stops on held-out windows.

@@ -204,7 +204,7 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
     18-state model, three draws of its starts) one network takes 0.023 to
     0.027 off the model's mean (0.179 to 0.155 on the first draw), and 0.011
     to 0.013 off its mean on the test levels' sine sweeps, a waveform the
-    fit never saw.
+    fit never saw: there, no more than the gated FIRs.
 
     Examples
     --------
