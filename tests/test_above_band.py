@@ -204,11 +204,11 @@ def test_on_the_f16_a_network_takes_what_the_linear_model_leaves_in_the_band(f16
     linear = BLAEstimator(10, period=8192, fs=400.0).fit(X, y)
     whole = AboveBandRegressor(FrozenEstimator(linear), cutoff=15.5, fs=400.0, n_taps=64, window_stride=1,
                                hidden_units=128, in_band=True, random_state=0).fit(X, y)
-    forces = [load_f16(f16_dir, level=lv, validation_level=None).X[0, :, 0] for lv in range(2, 8)]
-    assert np.corrcoef(forces).min() > 0.985
+    records = {lv: load_f16(f16_dir, level=lv, validation_level=None) for lv in range(2, 8)}
+    assert np.corrcoef([d.X[0, :, 0] for d in records.values()]).min() > 0.985
     multisine, sweep = {}, {}
     for lv in (2, 4, 6):
-        d = load_f16(f16_dir, level=lv, validation_level=None)
+        d = records[lv]
         multisine[lv] = [nrmse_by_band(d.y, m.predict(d.X), fs=400.0, edges=(0.0, 15.5, 200.01))
                          for m in (linear, whole)]
         d = load_f16(f16_dir, level=lv, kind="sinesweep", validation_level=None)

@@ -68,10 +68,14 @@ def fit_networks(inputs, errors, weights, held_out, hidden_units, alpha, n_netwo
         # generator and draw the same initial weights
         rng = check_random_state(random_state)
         seeds = [int(rng.randint(np.iinfo(np.int32).max)) for _ in range(n_networks)]
+    # split once for all the networks (the training windows are the bulk of the memory)
+    held_out = np.concatenate(held_out)
+    weight = rows / rows.mean()
+    fit_part = A[~held_out], scaled[~held_out], weight[~held_out]
+    held_out_part = A[held_out], scaled[held_out], weight[held_out]
     # one network alone is fitted here, with every core for its products
     networks = Parallel(n_jobs=min(effective_n_jobs(n_jobs), n_networks))(
-        delayed(_fit_network)(A, scaled, rows / rows.mean(), np.concatenate(held_out), hidden_units, alpha, seed)
-        for seed in seeds)
+        delayed(_fit_network)(fit_part, held_out_part, hidden_units, alpha, seed) for seed in seeds)
     return networks, input_scale, target_scale
 
 
@@ -85,15 +89,14 @@ def held_out_rows(n_samples, period):
     return np.arange(n_samples) % length >= length - max(1, length // 10)
 
 
-def _fit_network(A, target, sample_weight, held_out, hidden_units, alpha, seed):
-    """Adam passes over the windows not held out, the weights kept from
-    the pass best on the held-out ones, stopped after ``PATIENCE`` passes
-    without a gain."""
+def _fit_network(fit_part, held_out_part, hidden_units, alpha, seed):
+    """Adam passes over the windows ``fit_part`` (windows, targets,
+    weights), the weights kept from the pass best on ``held_out_part``,
+    stopped after ``PATIENCE`` passes without a gain."""
     network = MLPRegressor(hidden_layer_sizes=(hidden_units,), alpha=alpha, batch_size=BATCH_SIZE,
                            random_state=seed)
-    fit_rows = ~held_out
-    A_fit, target_fit, weight_fit = A[fit_rows], target[fit_rows], sample_weight[fit_rows]
-    A_val, target_val, weight_val = A[held_out], target[held_out], sample_weight[held_out]
+    A_fit, target_fit, weight_fit = fit_part
+    A_val, target_val, weight_val = held_out_part
     best, best_loss, stale = None, np.inf, 0
     for _ in range(MAX_PASSES):
         network.partial_fit(A_fit, target_fit, sample_weight=weight_fit)
