@@ -13,7 +13,7 @@ from sklearn_pnlss.statespace.pnlss import PNLSSModel
 from jacobian_check import finite_difference_jacobian
 
 
-def _random_model(rng, n=3, m=1, p=1, r=2, d=4, output_branches=False, linear_branch=True):
+def _random_model(rng, n=3, m=1, p=1, r=2, d=4, output_branches=False, linear_branch=True, signed=False):
     G = 0.3 * rng.standard_normal((r, d)) / np.arange(1, d + 1)
     if not linear_branch:
         G[:, 0] = 0.0
@@ -23,7 +23,7 @@ def _random_model(rng, n=3, m=1, p=1, r=2, d=4, output_branches=False, linear_br
         Wx=0.2 * rng.standard_normal((n, r)),
         Wy=0.2 * rng.standard_normal((p, r)) if output_branches else np.zeros((p, r)),
         V=rng.standard_normal((n + m, r)) / np.sqrt(n + m),
-        G=G, output_branches=output_branches,
+        G=G, output_branches=output_branches, signed=signed,
     )
 
 
@@ -59,9 +59,10 @@ def _as_pnlss(model, rng, linear_branch=True):
 
 @pytest.mark.parametrize("n, m, p", [(3, 1, 1), (3, 2, 2)])
 @pytest.mark.parametrize("output_branches", [False, True])
-def test_jacobian_is_exact(n, m, p, output_branches):
+@pytest.mark.parametrize("signed", [False, True])
+def test_jacobian_is_exact(n, m, p, output_branches, signed):
     rng = np.random.default_rng(0)
-    model = _random_model(rng, n=n, m=m, p=p, output_branches=output_branches)
+    model = _random_model(rng, n=n, m=m, p=p, output_branches=output_branches, signed=signed)
     U = 0.3 * rng.standard_normal((200, m))
     seg = [Segment(U, np.zeros((190, p)), 10)]
     J = model.jacobian(seg)
@@ -264,3 +265,29 @@ def test_step_basis_steps_the_branches_in_legendre_polynomials_over_their_range(
         def cond(M):
             return np.linalg.cond(M / np.linalg.norm(M, axis=0))
         assert cond(stepped) * 100 < cond(powers)
+
+
+def test_signed_powers_simulate_the_odd_branches():
+    """In signed powers a branch is sum_k G[k] z |z|**k: the kernel's
+    simulation equals a plain loop over the samples with that branch, and
+    differs from the same coefficients in powers (the even terms change
+    sign with z)."""
+    rng = np.random.default_rng(7)
+    model = _random_model(rng, n=3, m=1, p=1, r=2, d=4, signed=True)
+    U = 0.5 * rng.standard_normal((300, 1))
+    x, Y_ref = np.zeros(3), []
+    for u in U:
+        z = np.concatenate([x, u]) @ model.V
+        g = np.array([sum(model.G[l, k] * z[l] * abs(z[l]) ** k for k in range(4)) for l in range(2)])
+        Y_ref.append(model.C @ x + model.D @ u)
+        x = model.A @ x + model.B @ u + model.Wx @ g
+    Y, _ = model.simulate(U)
+    np.testing.assert_allclose(Y, np.array(Y_ref), rtol=1e-12, atol=1e-12)
+    z = np.array([[-1.5, 0.7]])
+    assert np.allclose(evaluate_branches(model.G, z, signed=True), [[
+        sum(model.G[l, k] * z[0, l] * abs(z[0, l]) ** k for k in range(4)) for l in range(2)]])
+    plain = _random_model(np.random.default_rng(7), n=3, m=1, p=1, r=2, d=4)
+    assert np.abs(plain.simulate(U)[0] - Y).max() > 1e-3 * np.abs(Y).max()
+    with pytest.raises(ValueError, match="signed powers are a polynomial basis"):
+        DecoupledModel(**{**{k: getattr(model, k) for k in "A B C D Wx Wy V".split()},
+                          "G": np.zeros((2, 5)), "knots": np.ones((2, 2)), "signed": True})

@@ -320,3 +320,15 @@ def test_bad_input_raises_value_error_naming_the_argument():
         sample_points(points, n_points=0)
     with pytest.raises(ValueError, match="coef"):
         decoupled_map(rng.normal(size=(N_OUT, 2)), V, np.ones((3, 3)), points)
+
+
+def test_signed_branches_are_fitted_from_their_derivatives():
+    """g(z) = z|z| + z**3 has g'(z) = 2|z| + 3z**2: in signed powers the
+    fit recovers it exactly (in powers it cannot: |z| is no polynomial)."""
+    z = np.linspace(-1.0, 1.0, 41)
+    H = (2 * np.abs(z) + 3 * z**2)[:, None]
+    coef = fit_branches([[1.0]], H, z[:, None], degree=3, signed=True)
+    np.testing.assert_allclose(coef, [[0.0, 1.0, 1.0]], atol=1e-12)
+    g = evaluate_branches(coef, z[:, None], signed=True)[:, 0]
+    np.testing.assert_allclose(g, z * np.abs(z) + z**3, atol=1e-12)
+    np.testing.assert_allclose(branch_derivatives(coef, z[:, None], signed=True)[:, 0], H[:, 0], atol=1e-12)

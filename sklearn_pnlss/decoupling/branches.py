@@ -14,7 +14,10 @@ of the state equation is not part of the model). Its linear term
 it at zero, the fit may move it.
 
 :func:`evaluate_branches` and :func:`branch_derivatives` are the Python twins
-of the compiled kernels' branch evaluation, trusted range included.
+of the compiled kernels' branch evaluation, trusted range included. With
+``signed=True`` the powers are signed, ``z |z| ** k`` in place of
+``z ** (k + 1)``: the same for odd degrees, ``sign(z) z ** (k + 1)`` for even
+ones (odd branches).
 """
 import numbers
 
@@ -47,7 +50,7 @@ def _check_Z(coef, Z):
     return Z
 
 
-def fit_branches(V, H, points, degree):
+def fit_branches(V, H, points, degree, signed=False):
     """Polynomial branches from the CPD factors ``V`` and ``H``.
 
     For branch ``l``, ``z_l = points @ V[:, l]`` and ``H[:, l]`` samples
@@ -65,6 +68,9 @@ def fit_branches(V, H, points, degree):
         The points at which the Jacobian tensor was sampled.
     degree : int
         Degree ``d >= 2`` of the branches ``g_l``.
+    signed : bool, default=False
+        Signed powers: ``g_l'`` fitted in ``|z| ** p`` (the derivative of
+        ``z |z| ** p`` is ``(p + 1) |z| ** p``).
 
     Returns
     -------
@@ -125,7 +131,7 @@ def fit_branches(V, H, points, degree):
         # and its higher coefficients are undetermined; lstsq then returns
         # the minimum-norm answer (zeros) instead of dividing by zero.
         scale = rms if rms > 0 else 1.0
-        design = (z / scale)[:, None] ** powers
+        design = ((np.abs(z) if signed else z) / scale)[:, None] ** powers
         a = np.linalg.lstsq(design, H[:, branch], rcond=None)[0]
         deriv = a[1:] / scale ** powers[1:]  # g_l' coefficients of z**1..z**(d-1)
         coef[branch, 1:] = deriv / (powers[1:] + 1)  # integrate: z**p -> z**(p+1)/(p+1)
@@ -189,9 +195,9 @@ def _held(coef, Z, bounds):
     return coef, Z, np.clip(Z, bounds[:, 0], bounds[:, 1])
 
 
-def _branch_functions(coef, Z, knots):
-    """g and g' of the plain polynomials (``knots`` None) or splines at Z
-    (N, r)."""
+def _branch_functions(coef, Z, knots, signed=False):
+    """g and g' of the plain polynomials (``knots`` None; in signed powers
+    when ``signed``) or splines at Z (N, r)."""
     if knots is not None:
         knots = np.asarray(knots, dtype=np.float64)
         if knots.shape != (coef.shape[0], 2):
@@ -202,12 +208,13 @@ def _branch_functions(coef, Z, knots):
             g[:, l] = B @ c
             dg[:, l] = dB @ c
         return g, dg
-    powers = Z[:, :, None] ** np.arange(coef.shape[1])  # z**k, k = 0..d-1
+    # z**k, k = 0..d-1; signed: |z|**k, and z |z|**k for z**(k + 1)
+    powers = (np.abs(Z) if signed else Z)[:, :, None] ** np.arange(coef.shape[1])
     k1 = np.arange(1, coef.shape[1] + 1)
     return np.einsum("nlk,lk->nl", powers * Z[:, :, None], coef), np.einsum("nlk,lk->nl", powers, coef * k1)
 
 
-def evaluate_branches(coef, Z, bounds=None, linear_extrapolation=False, knots=None):
+def evaluate_branches(coef, Z, bounds=None, linear_extrapolation=False, knots=None, signed=False):
     """Values of the branches, ``G[k, l] = g_l(Z[k, l])``, as the decoupled
     model evaluates them.
 
@@ -226,6 +233,9 @@ def evaluate_branches(coef, Z, bounds=None, linear_extrapolation=False, knots=No
         Spline branches: ``[first knot, spacing]`` of each, ``coef[l, k]``
         multiplying ``B_k(z) - B_k(0)`` (see
         :mod:`sklearn_pnlss.statespace.splines`); None: polynomials.
+    signed : bool, default=False
+        Polynomials in signed powers, ``coef[l, k]`` multiplying
+        ``z |z| ** k``.
 
     Returns
     -------
@@ -239,20 +249,22 @@ def evaluate_branches(coef, Z, bounds=None, linear_extrapolation=False, knots=No
     [[12.0]]
     >>> evaluate_branches([[0.0, 1.0, 1.0]], [[3.0]], [[-2.0, 2.0]], linear_extrapolation=True).tolist()
     [[28.0]]
+    >>> evaluate_branches([[0.0, 1.0, 1.0]], [[-2.0]], signed=True).tolist()  # z|z| + z**3 at -2
+    [[-12.0]]
     """
     coef, Z, Zc = _held(coef, Z, bounds)
-    g, dg = _branch_functions(coef, Zc, knots)
+    g, dg = _branch_functions(coef, Zc, knots, signed)
     return g + dg * (Z - Zc) if linear_extrapolation else g
 
 
-def branch_derivatives(coef, Z, bounds=None, linear_extrapolation=False, knots=None):
+def branch_derivatives(coef, Z, bounds=None, linear_extrapolation=False, knots=None, signed=False):
     """Derivatives of the branches, ``G'[k, l] = g_l'(Z[k, l])``, as the
     decoupled model evaluates them (zero where a branch is held, the edge
     slope where it follows its tangent).
 
     Parameters
     ----------
-    coef, Z, bounds, linear_extrapolation, knots
+    coef, Z, bounds, linear_extrapolation, knots, signed
         As in :func:`evaluate_branches`.
 
     Returns
@@ -265,7 +277,7 @@ def branch_derivatives(coef, Z, bounds=None, linear_extrapolation=False, knots=N
     [[16.0]]
     """
     coef, Z, Zc = _held(coef, Z, bounds)
-    dg = _branch_functions(coef, Zc, knots)[1]
+    dg = _branch_functions(coef, Zc, knots, signed)[1]
     return dg if linear_extrapolation else np.where(Z == Zc, dg, 0.0)
 
 

@@ -67,7 +67,7 @@ def nonlinear_jacobian_tensor(pnlss_model, points):
 
 
 def decoupled_start(pnlss_model, states_inputs, n_branches, degree, *, n_points=500, n_knots=None,
-                    random_state=None):
+                    signed=False, random_state=None):
     """Decoupled model that approximates a PNLSS model's polynomial.
 
     Parameters
@@ -88,6 +88,10 @@ def decoupled_start(pnlss_model, states_inputs, n_branches, degree, *, n_points=
         Spline branches with this many knots (``n_knots + 2``
         coefficients), fitted to the polynomial branches over the sampled
         points; None: the polynomial branches.
+    signed : bool, default=False
+        Polynomial branches in signed powers ``z |z| ** k`` (see
+        :class:`~sklearn_pnlss.statespace.decoupled.DecoupledModel`), fitted
+        to the branch derivatives the CPD samples.
     random_state : int, RandomState, Generator or None, default=None
         Controls the sampling points and the random start of the CPD.
 
@@ -139,7 +143,7 @@ def decoupled_start(pnlss_model, states_inputs, n_branches, degree, *, n_points=
     points = sample_points(states_inputs, n_points=n_points, random_state=rng)
     J = _jacobian_tensor(E, exE, F, exF, points)
     W, V, H, cpd_error = decompose_jacobian(J, n_branches, random_state=rng)
-    G = fit_branches(V, H, points, degree)
+    G = fit_branches(V, H, points, degree, signed=signed)
     knots = None
     if n_knots is not None:
         G, knots = splines_from_polynomials(G, points @ V, n_knots + 2)
@@ -154,11 +158,13 @@ def decoupled_start(pnlss_model, states_inputs, n_branches, degree, *, n_points=
         G=G,
         output_branches=output_branches,
         knots=knots,
+        signed=signed,
     )
     return model, cpd_error
 
 
-def random_branches_start(linear_model, states_inputs, n_branches, degree, *, n_knots=None, random_state=None):
+def random_branches_start(linear_model, states_inputs, n_branches, degree, *, n_knots=None, signed=False,
+                          random_state=None):
     """Decoupled model that equals a linear model, with random branches ready
     to grow.
 
@@ -185,6 +191,9 @@ def random_branches_start(linear_model, states_inputs, n_branches, degree, *, n_
         fitted to the random polynomials of degree ``degree``: the same
         functions as the polynomial start over the knots. None: the
         polynomial branches.
+    signed : bool, default=False
+        Polynomial branches in signed powers ``z |z| ** k`` (the same
+        coefficients on the signed basis).
     random_state : int, RandomState, Generator or None, default=None
         Controls the directions and the branches' coefficients.
 
@@ -219,5 +228,5 @@ def random_branches_start(linear_model, states_inputs, n_branches, degree, *, n_
         G, knots = splines_from_polynomials(G, states_inputs @ V, n_knots + 2)
     return DecoupledModel(
         A=A.copy(), B=B.copy(), C=C.copy(), D=D.copy(), Wx=np.zeros((n, n_branches)),
-        Wy=np.zeros((p, n_branches)), V=np.ascontiguousarray(V), G=G, knots=knots,
+        Wy=np.zeros((p, n_branches)), V=np.ascontiguousarray(V), G=G, knots=knots, signed=signed,
     )

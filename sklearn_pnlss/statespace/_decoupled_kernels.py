@@ -3,6 +3,7 @@
     z = V^T s,   s = [x; u],   g_l(z_l) = sum_k G[l, k] z_l ** (k + 1)
     x(t+1) = A x + B u + Wx g(z),   y = C x + D u + Wy g(z)
 
+or, signed powers, g_l(z_l) = sum_k G[l, k] z_l |z_l| ** k (odd functions),
 or, spline branches, g_l(z_l) = sum_k G[l, k] (B_k(z_l) - B_k(0)) with
 uniform cubic B-splines B_k (see :mod:`.splines`).
 
@@ -51,17 +52,21 @@ def _stack(x, u, s):
 
 
 @_jit
-def _polynomial_at(G, b, zc, zp, dzp):
-    """g_b(zc), g_b'(zc); zp[b, k] = z**(k+1), dzp[k] its z-derivative."""
+def _polynomial_at(G, b, signed, zc, zp, dzp):
+    """g_b(zc), g_b'(zc); zp[b, k] = z**(k+1) (``signed``: z |z|**k),
+    dzp[k] its z-derivative."""
     val = 0.0
     der = 0.0
+    # signed: the even powers z**(k+1) turn into z |z|**k = sign(z) z**(k+1)
+    sign = -1.0 if signed and zc < 0.0 else 1.0
     zk = 1.0  # zc ** k
     for k in range(G.shape[1]):
-        der += (k + 1) * G[b, k] * zk
-        dzp[k] = (k + 1) * zk
+        f = sign if k % 2 == 1 else 1.0
+        dzp[k] = (k + 1) * zk * f
+        der += G[b, k] * dzp[k]
         zk *= zc
-        zp[b, k] = zk
-        val += G[b, k] * zk
+        zp[b, k] = zk * f
+        val += G[b, k] * zp[b, k]
     return val, der
 
 
@@ -99,12 +104,13 @@ def _spline_at(G, b, knots, B0, zc, zp, dzp):
 
 
 @_jit
-def _branches(V, G, lo, hi, linear, knots, B0, s, zp, dzp, g, dg):
+def _branches(V, G, lo, hi, linear, signed, knots, B0, s, zp, dzp, g, dg):
     """Branch values ``g``, their derivatives ``dg`` with respect to the
     branch input, and ``zp[b, k]``, the derivative of ``g_b`` with respect to
     ``G[b, k]``, at ``z = V^T s`` (continued outside ``[lo, hi]``);
-    polynomial branches (``knots`` None), or splines on ``knots`` (r, 2)
-    with offsets ``B0`` (r, d). ``dzp`` (d,) is scratch."""
+    polynomial branches (``knots`` None; in signed powers when ``signed``),
+    or splines on ``knots`` (r, 2) with offsets ``B0`` (r, d). ``dzp`` (d,)
+    is scratch."""
     r, d = G.shape
     for b in range(r):
         z = 0.0
@@ -114,7 +120,7 @@ def _branches(V, G, lo, hi, linear, knots, B0, s, zp, dzp, g, dg):
         if knots is not None:  # pruned when compiled for polynomials
             val, der = _spline_at(G, b, knots, B0, zc, zp, dzp)
         else:
-            val, der = _polynomial_at(G, b, zc, zp, dzp)
+            val, der = _polynomial_at(G, b, signed, zc, zp, dzp)
         if zc != z:
             if linear:
                 # Tangent continuation: g(zc) + g'(zc) (z - zc).
@@ -169,7 +175,7 @@ def _branch_direct(w, dg, s, zp, oV, oG, row):
 
 
 @numba.njit(cache=True, nogil=True)
-def decoupled_simulate(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, knots, B0, U, x0):
+def decoupled_simulate(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, signed, knots, B0, U, x0):
     """Simulate; returns (Y, X, n_ok, x_end). n_ok < len(U) means the state
     left the range (divergence) after sample n_ok - 1."""
     N, m = U.shape
@@ -187,7 +193,7 @@ def decoupled_simulate(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, knots, B0, U, x
     x_next = np.empty(n)
     for t in range(N):
         _stack(x, U[t], s)
-        _branches(V, G, lo, hi, linear, knots, B0, s, zp, dzp, g, dg)
+        _branches(V, G, lo, hi, linear, signed, knots, B0, s, zp, dzp, g, dg)
         X[t] = x
         _affine(C, x, D, U[t], Wy, g, Y[t])
         _affine(A, x, B, U[t], Wx, g, x_next)
@@ -199,7 +205,7 @@ def decoupled_simulate(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, knots, B0, U, x
 
 
 @numba.njit(cache=True, nogil=True)
-def decoupled_jacobian(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, knots, B0, U, x, Sx, n_skip,
+def decoupled_jacobian(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, signed, knots, B0, U, x, Sx, n_skip,
                        out_branch_params, J):
     """Output sensitivities dy(t)/dtheta for t >= n_skip, written to
     J[(t - n_skip), :, :] (shape (N - n_skip, p, n_theta)). ``Wy`` is a
@@ -238,7 +244,7 @@ def decoupled_jacobian(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, knots, B0, U, x
     for t in range(N):
         u = U[t]
         _stack(x_now, u, s)
-        _branches(V, G, lo, hi, linear, knots, B0, s, zp, dzp, g, dg)
+        _branches(V, G, lo, hi, linear, signed, knots, B0, s, zp, dzp, g, dg)
         _linearised(A, Wx, dg, V, Ax)
         if t >= n_skip:
             _linearised(C, Wy, dg, V, Cx)

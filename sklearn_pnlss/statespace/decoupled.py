@@ -33,9 +33,10 @@ class DecoupledModel(StateSpaceModel):
 
     ``r`` univariate branches of the projections ``z = V^T s`` replace the
     full multivariate polynomial of a PNLSS model: polynomials
-    ``g_l(z) = sum_k G[l, k] z**(k+1)`` (degrees 1..d), or, with ``knots``,
-    cubic splines ``g_l(z) = sum_k G[l, k] (B_k(z) - B_k(0))`` on uniform
-    knots (:mod:`.splines`).
+    ``g_l(z) = sum_k G[l, k] z**(k+1)`` (degrees 1..d), with ``signed`` the
+    odd signed powers ``g_l(z) = sum_k G[l, k] z |z|**k``, or, with
+    ``knots``, cubic splines ``g_l(z) = sum_k G[l, k] (B_k(z) - B_k(0))`` on
+    uniform knots (:mod:`.splines`).
 
     Parameters
     ----------
@@ -49,7 +50,8 @@ class DecoupledModel(StateSpaceModel):
     V : ndarray of shape (n + m, r)
         Branch directions over ``s = [x; u]``.
     G : ndarray of shape (r, d)
-        ``G[l, k]`` multiplies ``z_l ** (k + 1)`` (or ``B_k(z_l) - B_k(0)``).
+        ``G[l, k]`` multiplies ``z_l ** (k + 1)`` (or ``z_l |z_l| ** k``, or
+        ``B_k(z_l) - B_k(0)``).
     output_branches : bool, default=False
         Whether ``Wy`` is a parameter.
     bounds : ndarray of shape (r, 2) or None, default=None
@@ -64,6 +66,12 @@ class DecoupledModel(StateSpaceModel):
         ``[first knot, spacing]`` of each branch's spline (``d - 3`` equal
         intervals; at least 4 coefficients), beyond which it follows its
         edge tangent; None: polynomial branches.
+    signed : bool, default=False
+        Polynomial branches in signed powers ``z |z| ** k`` (``k = 0..d-1``):
+        odd functions whose even degrees are ``sign(z) z ** (k + 1)``, the
+        amplitude dependence of friction, clearance and hysteresis (a term
+        ``z |z|`` shifts a mode's frequency in proportion to the amplitude,
+        ``z ** 3`` to its square). Not with ``knots``.
 
     Notes
     -----
@@ -84,16 +92,20 @@ class DecoupledModel(StateSpaceModel):
     bounds: np.ndarray | None = None
     linear_extrapolation: bool = False
     knots: np.ndarray | None = None
+    signed: bool = False
 
     def __post_init__(self):
         # ``copy`` of the base copies every field with np.copy; keep the flags
         # plain bools (numba specialises the kernel on their type).
         self.output_branches = bool(self.output_branches)
         self.linear_extrapolation = bool(self.linear_extrapolation)
+        self.signed = bool(self.signed)
         n, m, p = self.A.shape[0], self.B.shape[1], self.C.shape[0]
         r, d = self.G.shape
         self.bounds = unbounded(r) if self.bounds is None else np.array(self.bounds, dtype=float)
         if self.knots is not None:
+            if self.signed:
+                raise ValueError("signed powers are a polynomial basis: spline branches (knots) cannot be signed.")
             self.knots = np.array(self.knots, dtype=float)
             if self.knots.shape != (r, 2) or d < 4 or not np.all(self.knots[:, 1] > 0):
                 raise ValueError(
@@ -165,7 +177,8 @@ class DecoupledModel(StateSpaceModel):
         with ``c_l`` the largest ``|z_l|`` at the points: the same
         polynomials of degree 1..d without constant term, but nearly
         orthogonal over the range the data cover, where the powers
-        ``z**(k+1)`` are nearly collinear. Measured on Bouc-Wen (3 branches
+        ``z**(k+1)`` are nearly collinear (signed powers are stepped in the
+        same combinations of theirs). Measured on Bouc-Wen (3 branches
         of degree 11, eight starts, 300 iterations;
         ``benchmarks/bench_step_basis.py``): the median start ends at
         -98.90 dB on the test multisine instead of -94.07 dB. The other
@@ -206,9 +219,9 @@ class DecoupledModel(StateSpaceModel):
         without the spline code, see :mod:`._decoupled_kernels`)."""
         lo, hi = self._bounds()
         if not self.splines:
-            return lo, hi, self.linear_extrapolation, None, None
+            return lo, hi, self.linear_extrapolation, self.signed, None, None
         B0 = np.vstack([cubic_bspline_basis(0.0, k, self.degree)[0] for k in self.knots])
-        return lo, hi, self.linear_extrapolation, self.knots, B0
+        return lo, hi, self.linear_extrapolation, False, self.knots, B0
 
     def _run(self, U, x0):
         return decoupled_simulate(
