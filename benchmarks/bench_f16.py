@@ -6,7 +6,8 @@ PNLSS iteration goes, beside the published figures.
 
     python benchmarks/bench_f16.py [--data-dir DIR] [--states 10]
         [--max-iter 20] [--n-jobs 1] [--decoupled 3:3 5:5 3:3:18@1 ...]
-        [--decoupled-iter 50] [--n-init 2] [--weighting relative|none]
+        [--decoupled-iter 50] [--branch-basis powers|signed_powers] [--n-init 2]
+        [--weighting relative|none]
         [--also-weighting noise ...] [--also-sweeps] [--cpd] [--no-pnlss]
         [--select [--select-states 18] [--select-draws 1 2]] [--above-band]
         [--above-band-lead 0 25 50] [--output FILE]
@@ -532,6 +533,8 @@ def main(argv=None):
                              "(states: --states if not given); @S: another draw of the starts "
                              "(random_state=S), recorded under draws")
     parser.add_argument("--decoupled-iter", type=int, default=50)
+    parser.add_argument("--branch-basis", choices=["powers", "signed_powers"], default="powers",
+                        help="of the decoupled models' polynomial branches (DecoupledPNLSSRegressor(branch_basis=))")
     parser.add_argument("--n-init", type=int, default=2)
     parser.add_argument("--weighting", choices=["relative", "none"], default="relative",
                         help="of the nonlinear fits' simulation error: each level's relative to its own output "
@@ -602,9 +605,11 @@ def main(argv=None):
         """The row and the model of one decoupled fit from the linear start
         of ``ns`` states (its time counted in the fit); ``sweeps``: the
         estimation levels' sine sweeps (from rest) trained on too."""
-        dsettings = {"n_states": ns, "n_branches": r, "degree": d, "init": "random", "n_init": args.n_init,
-                     "max_iter": args.decoupled_iter, "weighting": weighting, "random_state": seed}
-        decoupled = DecoupledPNLSSRegressor(ns, n_branches=r, degree=d, init="random", n_init=args.n_init,
+        dsettings = {"n_states": ns, "n_branches": r, "degree": d, "branch_basis": args.branch_basis, "init": "random",
+                     "n_init": args.n_init, "max_iter": args.decoupled_iter, "weighting": weighting,
+                     "random_state": seed}
+        decoupled = DecoupledPNLSSRegressor(ns, n_branches=r, degree=d, branch_basis=args.branch_basis,
+                                            init="random", n_init=args.n_init,
                                             max_iter=args.decoupled_iter, period=8192, n_jobs=2,
                                             weighting=weighting, random_state=seed)
         if ns not in linear:
@@ -615,7 +620,8 @@ def main(argv=None):
         X_fit, y_fit = (list(X) + [d.X[0] for d in train_sweeps], list(y) + [d.y[0] for d in train_sweeps]) \
             if sweeps else (X, y)
         decoupled.fit(start.transform(X_fit), y_fit)
-        name = (f"DecoupledPNLSSRegressor({ns}, {r}, {d}) random" + (f", random_state={seed}" if seed else "")
+        basis = "" if args.branch_basis == "powers" else f", {args.branch_basis}"
+        name = (f"DecoupledPNLSSRegressor({ns}, {r}, {d}{basis}) random" + (f", random_state={seed}" if seed else "")
                 + ("" if weighting == args.weighting else f", weighting={weighting}")
                 + (", with the sweeps" if sweeps else ""))
         dsettings["train_sweeps"] = sweeps
