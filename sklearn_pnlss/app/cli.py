@@ -41,6 +41,9 @@ def main(argv=None):
     fit.add_argument("--degrees", type=int, nargs="+", default=[10], metavar="D",
                      help="decoupled model: branch degrees to try; the grid is every (R, D) pair, the one "
                      "best on the validation realisation is kept (default: %(default)s)")
+    fit.add_argument("--branch-basis", choices=["powers", "signed_powers"], default="powers",
+                     help="decoupled model: branch terms, z**k or the odd signed powers z|z|**(k-1) "
+                     "(default: %(default)s)")
     fit.add_argument("--n-init", type=int, default=5, help="starts of each decoupled model (default: %(default)s)")
     fit.add_argument("--max-iter", type=int, default=None,
                      help="Levenberg-Marquardt iterations of every nonlinear model (default: 40 pnlss, "
@@ -75,7 +78,8 @@ def main(argv=None):
         data_dir=args.data_dir, output_dir=args.output_dir, models=args.models,
         n_realizations=args.n_realizations, n_periods=args.n_periods, rms=args.rms,
         noise_rms=args.noise_rms, random_state=args.random_state,
-        branches=args.branches, degrees=args.degrees, n_init=args.n_init, max_iter=args.max_iter,
+        branches=args.branches, degrees=args.degrees, branch_basis=args.branch_basis, n_init=args.n_init,
+        max_iter=args.max_iter,
         n_jobs=args.n_jobs, save_models=args.save_models,
         plots=not args.no_plots, progress=not args.no_progress,
     )
