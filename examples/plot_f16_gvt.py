@@ -243,7 +243,12 @@ if train is not None:
 #   test levels more than the estimation levels around them, level 2 (half
 #   way from 12 to 37 N rms) the most. Which branches follow that change
 #   best is chosen without the test levels by holding out estimation levels
-#   3 and 5 in turn (``benchmarks/bench_f16.py --select``).
+#   3 and 5 in turn (``benchmarks/bench_f16.py --select``). The modes
+#   soften in proportion to the force (``benchmarks/f16_level_modes.py``),
+#   which branches in signed powers (``branch_basis="signed_powers"``:
+#   ``z``, ``z|z|``, ``z**3`` ...) write directly; of degree 5 they take the
+#   18-state model's mean from 0.182 to 0.175, most of it at level 2, but
+#   on the sine sweeps they gain nothing (README, F-16 section).
 # - **Large full models.** A Levenberg-Marquardt iteration of the full
 #   PNLSS model (2,893 parameters, 98,304 residuals) takes about 5 s on two
 #   cores (twice as long when the machine's BLAS runs at half its rate),
