@@ -80,6 +80,37 @@ def score_test_signals(model, data):
     return out
 
 
+def paper_training_draw(seed):
+    """The seed paper's training data of one draw: two realisations of two
+    periods at 55 N rms for training and the steady-state period of a third
+    for validation; returns (data, X, y, X_val, y_val)."""
+    from sklearn_pnlss.datasets import make_bouc_wen
+
+    data = make_bouc_wen(n_realizations=3, n_periods=2, rms=55.0, noise_rms=8e-6, random_state=seed)
+    P = data.period
+    return data, data.X_train[:2], data.y_train[:2], data.X_train[2:, P:], data.y_train[2:, P:]
+
+
+def paper_start(init, data, X, y):
+    """The fitted model a decoupled one of the seed paper's setting starts
+    from: the BLA (``init="random"``) or the full model in the states and
+    input, degrees 2 and 3, 200 iterations (``init="cpd"``)."""
+    from sklearn_pnlss import BLAEstimator, PNLSSRegressor
+
+    if init == "cpd":
+        return PNLSSRegressor(3, degrees=(2, 3), variables="states_inputs", period=data.period, max_iter=200).fit(X, y)
+    return BLAEstimator(3, period=data.period, fs=data.fs).fit(X, y)
+
+
+def official_test_signals(data_dir):
+    """{"multisine": (X, y), "sweep": (X, y)}: the official Bouc-Wen test signals."""
+    from sklearn_pnlss.datasets import load_bouc_wen_official
+
+    official = load_bouc_wen_official(data_dir)
+    return {"multisine": (official.X_test_multisine, official.y_test_multisine),
+            "sweep": (official.X_test_sweep, official.y_test_sweep)}
+
+
 def _plain(value):
     """numpy scalars and arrays as JSON numbers and lists; anything else
     (a place's tuple is already a list) as its text."""

@@ -26,7 +26,8 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _bench_utils import DEFAULT_DATA, RESULTS, header, write_results  # noqa: E402
+from _bench_utils import (DEFAULT_DATA, RESULTS, header, official_test_signals, paper_start,  # noqa: E402
+                          paper_training_draw, write_results)
 
 BASES = ("powers", "signed_powers")
 
@@ -40,25 +41,17 @@ def main(argv=None):
     parser.add_argument("--output", default=RESULTS / "branch_basis.json")
     args = parser.parse_args(argv)
 
-    from sklearn_pnlss import BLAEstimator, DecoupledPNLSSRegressor, PNLSSRegressor
-    from sklearn_pnlss.datasets import load_bouc_wen_official, make_bouc_wen
+    from sklearn_pnlss import DecoupledPNLSSRegressor
 
-    official = load_bouc_wen_official(args.data_dir)
-    tests = {"multisine": (official.X_test_multisine, official.y_test_multisine),
-             "sweep": (official.X_test_sweep, official.y_test_sweep)}
+    tests = official_test_signals(args.data_dir)
+    inits = ("random", "cpd") if args.cpd else ("random",)
     rows = []
     for seed in args.seeds:
-        data = make_bouc_wen(n_realizations=3, n_periods=2, rms=55.0, noise_rms=8e-6, random_state=seed)
+        data, X, y, X_val, y_val = paper_training_draw(seed)
         P = data.period
-        X, y = data.X_train[:2], data.y_train[:2]
-        X_val, y_val = data.X_train[2:, P:], data.y_train[2:, P:]
-        starts = {"random": lambda: BLAEstimator(3, period=P, fs=data.fs).fit(X, y)}
-        if args.cpd:
-            starts["cpd"] = lambda: PNLSSRegressor(3, degrees=(2, 3), variables="states_inputs", period=P,
-                                                   max_iter=200).fit(X, y)
-        for init, fit_start in starts.items():
+        for init in inits:
             t0 = time.perf_counter()
-            start = fit_start()
+            start = paper_start(init, data, X, y)
             start_s = time.perf_counter() - t0
             for basis in BASES:
                 t0 = time.perf_counter()
@@ -75,7 +68,7 @@ def main(argv=None):
                       f"{row['fit_s']:5.1f} s", flush=True)
     median = {init: {basis: {name: float(np.median([r[f"db_{name}"] for r in rows
                                                     if (r["init"], r["branch_basis"]) == (init, basis)]))
-                             for name in tests} for basis in BASES} for init in starts}
+                             for name in tests} for basis in BASES} for init in inits}
     for init, by_basis in median.items():
         for basis, figures in by_basis.items():
             print(f"median over {len(args.seeds)} draws, init={init:6s} {basis:13s}: multisine "

@@ -22,7 +22,8 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _bench_utils import DEFAULT_DATA, RESULTS, header, write_results  # noqa: E402
+from _bench_utils import (DEFAULT_DATA, RESULTS, header, official_test_signals, paper_start,  # noqa: E402
+                          paper_training_draw, write_results)
 
 
 def main(argv=None):
@@ -33,25 +34,16 @@ def main(argv=None):
     parser.add_argument("--output", default=RESULTS / "decoupled_init.json")
     args = parser.parse_args(argv)
 
-    from sklearn_pnlss import BLAEstimator, DecoupledPNLSSRegressor, PNLSSRegressor
-    from sklearn_pnlss.datasets import load_bouc_wen_official, make_bouc_wen
+    from sklearn_pnlss import DecoupledPNLSSRegressor
 
-    official = load_bouc_wen_official(args.data_dir)
-    tests = {"multisine": (official.X_test_multisine, official.y_test_multisine),
-             "sweep": (official.X_test_sweep, official.y_test_sweep)}
+    tests = official_test_signals(args.data_dir)
     rows = []
     for seed in args.seeds:
-        data = make_bouc_wen(n_realizations=3, n_periods=2, rms=55.0, noise_rms=8e-6, random_state=seed)
+        data, X, y, X_val, y_val = paper_training_draw(seed)
         P = data.period
-        X, y = data.X_train[:2], data.y_train[:2]
-        X_val, y_val = data.X_train[2:, P:], data.y_train[2:, P:]
         for init in ("cpd", "random"):
             t0 = time.perf_counter()
-            if init == "cpd":
-                start = PNLSSRegressor(3, degrees=(2, 3), variables="states_inputs", period=P,
-                                       max_iter=200).fit(X, y)
-            else:
-                start = BLAEstimator(3, period=P, fs=data.fs).fit(X, y)
+            start = paper_start(init, data, X, y)
             model = DecoupledPNLSSRegressor(3, n_branches=3, degree=10, period=P, init=init, n_init=5,
                                             n_jobs=args.n_jobs, random_state=0)
             model.fit(start.transform(X), y, X_val=X_val, y_val=y_val)
