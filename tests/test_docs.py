@@ -372,25 +372,11 @@ def _f16_led():
     return next(r for r in _results("f16_lead")["models"] if r["model"].get("n_lead"))
 
 
-def _f16_nets(seed=0, n_networks=1):
-    """The 18-state decoupled model (draw ``seed``) with ``n_networks``
-    averaged networks modelling its whole error, or alone with
-    ``n_networks=0`` (bench_f16.py --in-band: f16_in_band.json)."""
-    f16 = _results("f16_in_band")
-    name = "DecoupledPNLSSRegressor(18, 3, 3) random" + (f", random_state={seed}" if seed else "")
-    if n_networks == 0:
-        return next(r for r in f16["models"] + f16["draws"] if r["model"]["estimator"] == name)
-    return next(r for r in f16["models"] + f16["draws"]
-                if r["model"]["estimator"].startswith(f"AboveBandRegressor({name}, hidden_units=")
-                and r["model"].get("n_networks", 1) == n_networks)
-
-
-def _f16_filters(seed=0):
-    """The 18-state decoupled model (draw ``seed``) with the gated filters
-    above the band, in the run of its networks (f16_in_band.json)."""
-    f16 = _results("f16_in_band")
-    name = "DecoupledPNLSSRegressor(18, 3, 3) random" + (f", random_state={seed}" if seed else "")
-    return next(r for r in f16["models"] + f16["draws"] if r["model"]["estimator"] == f"AboveBandRegressor({name})")
+def _f16_decoupled_name(seed=0, degree=3, basis="powers"):
+    """The name bench_f16.py gives the 18-state decoupled model of three
+    branches of ``degree`` in ``basis``, draw ``seed``."""
+    return (f"DecoupledPNLSSRegressor(18, 3, {degree}{', signed_powers' if basis == 'signed_powers' else ''}) random"
+            + (f", random_state={seed}" if seed else ""))
 
 
 def _f16_branches(basis, degree, seed=0, filters=False):
@@ -399,10 +385,21 @@ def _f16_branches(basis, degree, seed=0, filters=False):
     f16_in_band.json (powers, degree 3), f16_degree5.json (powers, degree
     5), f16_signed.json (signed powers)."""
     results = _results({("powers", 3): "f16_in_band", ("powers", 5): "f16_degree5"}.get((basis, degree), "f16_signed"))
-    name = (f"DecoupledPNLSSRegressor(18, 3, {degree}{', signed_powers' if basis == 'signed_powers' else ''}) random"
-            + (f", random_state={seed}" if seed else ""))
+    name = _f16_decoupled_name(seed, degree, basis)
     return next(r for r in results["models"] + results["draws"]
                 if r["model"]["estimator"] == (f"AboveBandRegressor({name})" if filters else name))
+
+
+def _f16_nets(seed=0, n_networks=1):
+    """The 18-state decoupled model (draw ``seed``) with ``n_networks``
+    averaged networks modelling its whole error, or alone with
+    ``n_networks=0`` (bench_f16.py --in-band: f16_in_band.json)."""
+    if n_networks == 0:
+        return _f16_branches("powers", 3, seed)
+    f16 = _results("f16_in_band")
+    return next(r for r in f16["models"] + f16["draws"]
+                if r["model"]["estimator"].startswith(f"AboveBandRegressor({_f16_decoupled_name(seed)}, hidden_units=")
+                and r["model"].get("n_networks", 1) == n_networks)
 
 
 def _f16_branch_row(basis, degree):
@@ -1188,9 +1185,10 @@ FIGURES = [
                     *_f16_lru_level_6(), _f16_nets(0, 3)["mean_nrmse_official"]]),
     Figure(R, "The gated filters of the same run (772 coefficients, 2 s on top of the model) reach 0.158, 0.166 and "
               "0.159 on the multisines and 0.227, 0.234 and 0.268 on the sweeps", IN_BAND,
-           lambda: [_f16_filters(0)["n_above_band_params"], _f16_filters(0)["fit_s"] - _f16_nets(0, 0)["fit_s"],
-                    *[_f16_filters(k)["mean_nrmse"] for k in range(3)],
-                    *[_f16_filters(k)["mean_nrmse_sweeps"] for k in range(3)]]),
+           lambda: [_f16_branches("powers", 3, filters=True)["n_above_band_params"],
+                    _f16_branches("powers", 3, filters=True)["fit_s"] - _f16_nets(0, 0)["fit_s"],
+                    *[_f16_branches("powers", 3, k, filters=True)["mean_nrmse"] for k in range(3)],
+                    *[_f16_branches("powers", 3, k, filters=True)["mean_nrmse_sweeps"] for k in range(3)]]),
     Figure(PN, "On the F-16 one such network takes 0.023 to 0.027 off the mean test NRMSE of each of three draws of "
                "the decoupled model's starts, and 0.011 to 0.013 off its mean on the test levels' sine sweeps",
            IN_BAND,
