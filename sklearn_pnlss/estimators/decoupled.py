@@ -96,7 +96,9 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         the sweep at the median, against -98.13 dB and -102.06 dB in powers,
         the same 51 nonlinear parameters (``benchmarks/bench_branch_basis.py``).
         Odd branches have no even part (no static offset from the
-        nonlinearity). Not with ``n_knots``.
+        nonlinearity): an asymmetric nonlinearity, such as the diode of the
+        Wiener-Hammerstein benchmark, is out of their reach, and there they
+        stay near the linear model. Not with ``n_knots``.
     period : int or None, default=None
         Samples per period; None: the period of the Pipeline stage this
         model starts from, if any (see :class:`PNLSSRegressor`).
