@@ -536,6 +536,9 @@ def main(argv=None):
     parser.add_argument("--branch-basis", choices=["powers", "signed_powers"], default="powers",
                         help="of the decoupled models' polynomial branches (DecoupledPNLSSRegressor(branch_basis=))")
     parser.add_argument("--n-init", type=int, default=2)
+    parser.add_argument("--output-branches", action="store_true",
+                        help="the decoupled models' branches enter the output equation too "
+                             "(DecoupledPNLSSRegressor(output_branches=True)): an acceleration feels a force at once")
     parser.add_argument("--weighting", choices=["relative", "none"], default="relative",
                         help="of the nonlinear fits' simulation error: each level's relative to its own output "
                              "power, as NRMSE scores the levels (default), or none (the largest level dominates)")
@@ -607,11 +610,12 @@ def main(argv=None):
         estimation levels' sine sweeps (from rest) trained on too."""
         dsettings = {"n_states": ns, "n_branches": r, "degree": d, "branch_basis": args.branch_basis, "init": "random",
                      "n_init": args.n_init, "max_iter": args.decoupled_iter, "weighting": weighting,
-                     "random_state": seed}
+                     "random_state": seed, "output_branches": args.output_branches}
         decoupled = DecoupledPNLSSRegressor(ns, n_branches=r, degree=d, branch_basis=args.branch_basis,
                                             init="random", n_init=args.n_init,
                                             max_iter=args.decoupled_iter, period=8192, n_jobs=2,
-                                            weighting=weighting, random_state=seed)
+                                            weighting=weighting, output_branches=args.output_branches,
+                                            random_state=seed)
         if ns not in linear:
             t0 = time.perf_counter()
             linear[ns] = BLAEstimator(ns, period=8192, fs=400.0).fit(X, y), time.perf_counter() - t0
@@ -623,7 +627,7 @@ def main(argv=None):
         basis = "" if args.branch_basis == "powers" else f", {args.branch_basis}"
         name = (f"DecoupledPNLSSRegressor({ns}, {r}, {d}{basis}) random" + (f", random_state={seed}" if seed else "")
                 + ("" if weighting == args.weighting else f", weighting={weighting}")
-                + (", with the sweeps" if sweeps else ""))
+                + (", with the sweeps" if sweeps else "") + (", output branches" if args.output_branches else ""))
         dsettings["train_sweeps"] = sweeps
         fit_s = time.perf_counter() - t0 + start_s
         train = {str(lv): nrmse_of(decoupled.predict(X[i]), y[i]).tolist() for i, lv in enumerate(TRAIN_LEVELS)}
