@@ -5,7 +5,8 @@ Branches in signed powers (``branch_basis="signed_powers"``: ``z``,
 ``z |z|``, ``z**3``, ``z**3 |z|`` ...) are odd and change a structure's
 stiffness and damping in proportion to the amplitude, as friction,
 clearances and hysteresis do; in powers ``z**3`` changes them with its
-square. The seed paper's setting, as ``bench_decoupled_init.py``: two
+square; and the two starts, from the linear model and from the full
+model, side by side. The seed paper's setting: two
 realisations of two periods at 55 N rms for training, a third for
 validation (best iterate and best start), three branches of degree 10 (51
 nonlinear parameters), five starts from the linear model

@@ -90,8 +90,7 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         structure's stiffness and damping change in proportion to the
         amplitude, which ``z |z|`` gives and a polynomial only approaches
         with many terms (``z**3`` changes them with its square). Measured on
-        Bouc-Wen (the seed paper's setting of
-        ``benchmarks/bench_decoupled_init.py``, ``init="random"``, six draws
+        Bouc-Wen (the seed paper's setting, ``init="random"``, six draws
         of the data): -105.88 dB on the test multisine and -110.13 dB on
         the sweep at the median, against -98.13 dB and -102.06 dB in powers,
         the same 51 nonlinear parameters (``benchmarks/bench_branch_basis.py``).
