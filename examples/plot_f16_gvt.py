@@ -248,7 +248,16 @@ if train is not None:
 #   which branches in signed powers (``branch_basis="signed_powers"``:
 #   ``z``, ``z|z|``, ``z**3`` ...) write directly; of degree 5 they take the
 #   18-state model's mean from 0.182 to 0.175, most of it at level 2, but
-#   on the sine sweeps they gain nothing (README, F-16 section).
+#   on the sine sweeps they gain nothing (README, F-16 section). What is
+#   left in the band is one mode's damping: pairing the modes of a linear
+#   model of each level, measured and simulated
+#   (``sklearn_pnlss.level_modes.modes_by_level``;
+#   ``benchmarks/f16_level_modes.py --model``), shows the model places the
+#   7.3 Hz mode within a few mHz at every level, but damps it a little off
+#   between the fitted levels, and that mode holds most of level 2's error
+#   in the band. Its measured damping stays flat to level 2 and then
+#   climbs steeply (the joint starting to slip): a curve that four fitted
+#   levels pin only coarsely.
 # - **Large full models.** A Levenberg-Marquardt iteration of the full
 #   PNLSS model (2,893 parameters, 98,304 residuals) takes about 5 s on two
 #   cores (twice as long when the machine's BLAS runs at half its rate),
