@@ -196,6 +196,29 @@ if train is not None:
               + "/".join(f"{v:.3f}" for v in above[1]))
 
 # %%
+# How the modes move with the level
+# ---------------------------------
+# In the band, a test level between two fitted ones asks how the response
+# changes with the amplitude. :func:`~sklearn_pnlss.level_modes.modes_by_level`
+# fits a linear model to each level's measurement and to the model's
+# simulation of the same force, and pairs their modes: every mode softens
+# as the force grows, and its damping rises, steeply from level 3 to level
+# 4 where the joint starts to slip.
+if train is not None:
+    from sklearn_pnlss.level_modes import modes_by_level
+    from sklearn_pnlss.plotting import plot_level_modes
+
+    levels = sorted([*TRAIN_LEVELS, *TEST_LEVELS])
+    by_level = {**dict(zip(TRAIN_LEVELS, train)), **test}
+    modes = modes_by_level([by_level[lv].X for lv in levels], [by_level[lv].y for lv in levels], decoupled,
+                           n_states=10, period=P, fs=fs)
+    print(modes)
+    axes = plot_level_modes(modes)
+    axes[0].set_xlabel("force rms (N)")
+    axes[1].set_xlabel("force rms (N)")
+    axes[0].figure.tight_layout()
+
+# %%
 # Beside the published models
 # ---------------------------
 # Published NRMSE on the test levels of the same protocol: a recurrent

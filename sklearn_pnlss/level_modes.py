@@ -15,7 +15,6 @@ model misses there, by a fraction of their half-power bandwidth.
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
 from .estimators import BLAEstimator
 from .statespace.linear import modal_parameters
@@ -82,11 +81,21 @@ def _oscillating_modes(A, fs):
 
 def _paired(freq, damp, ref):
     """``freq, damp`` reordered to the reference frequencies ``ref``: each
-    reference mode takes the mode nearest in frequency (relative distance,
-    each mode used once), NaN where there are fewer modes than ``ref``."""
+    mode belongs to the reference mode nearest to it (relative distance),
+    and each reference mode takes the nearest of its own; NaN where none
+    is. A mode the other model lacks so stays unpaired instead of taking a
+    neighbour's partner (a pairing that minimises the total distance would
+    shift a whole row of modes by one)."""
     out_f, out_d = np.full(ref.size, np.nan), np.full(ref.size, np.nan)
-    rows, cols = linear_sum_assignment(np.abs(np.log(ref[:, None] / freq[None, :])))
-    out_f[rows], out_d[rows] = freq[cols], damp[cols]
+    if ref.size == 0 or freq.size == 0:
+        return out_f, out_d
+    distance = np.abs(np.log(freq[:, None] / ref[None, :]))  # (modes, reference modes)
+    owner = np.argmin(distance, axis=1)
+    for k in range(ref.size):
+        mine = np.flatnonzero(owner == k)
+        if mine.size:
+            best = mine[np.argmin(distance[mine, k])]
+            out_f[k], out_d[k] = freq[best], damp[best]
     return out_f, out_d
 
 

@@ -16,6 +16,7 @@ __all__ = [
     "plot_error_spectra",
     "plot_grid_search",
     "plot_hysteresis",
+    "plot_level_modes",
     "plot_time_errors",
 ]
 
@@ -250,6 +251,49 @@ def plot_branches(model, X=None, *, n_points=200, axes=None):
         ax.set_title(f"branch {k + 1}")
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=8, markerscale=5)
+    return axes
+
+
+def plot_level_modes(modes, *, axes=None):
+    """How each mode moves with the excitation level: its frequency shift
+    from the first level (%) and its damping ratio (%) against the input
+    rms, measured (solid, dots) and of the fitted model (dashed, crosses).
+
+    Parameters
+    ----------
+    modes : LevelModes
+        From :func:`~sklearn_pnlss.level_modes.modes_by_level`.
+    axes : sequence of two matplotlib.axes.Axes or None, default=None
+        Frequency shift, damping; None: a new figure with both side by side.
+
+    Returns
+    -------
+    ndarray of two matplotlib.axes.Axes
+        On each, per mode the measured line, then the model's when
+        ``modes`` has one.
+    """
+    if axes is None:
+        import matplotlib.pyplot as plt
+
+        _, axes = plt.subplots(1, 2, figsize=(9.0, 3.6))
+    axes = np.ravel(axes)
+    if axes.size != 2:
+        raise ValueError(f"axes must hold two Axes (frequency shift, damping); got {axes.size}.")
+    rms, ref = modes.input_rms, modes.frequencies[0]
+    curves = [(modes.frequencies, modes.damping, "-o", "")]
+    if modes.model_frequencies is not None:
+        curves.append((modes.model_frequencies, modes.model_damping, "--x", " (model)"))
+    for k in range(ref.size):
+        for freq, damp, style, suffix in curves:
+            label = f"{ref[k]:.3g}{suffix}"
+            axes[0].plot(rms, 100 * (freq[:, k] / ref[k] - 1), style, color=f"C{k % 10}", ms=4, label=label)
+            axes[1].plot(rms, 100 * damp[:, k], style, color=f"C{k % 10}", ms=4, label=label)
+    axes[0].set_ylabel("frequency shift from the first level (%)")
+    axes[1].set_ylabel("damping ratio (%)")
+    for ax in axes:
+        ax.set_xlabel("input rms")
+        ax.grid(alpha=0.3)
+    axes[1].legend(fontsize=7, title="mode", title_fontsize=7)
     return axes
 
 

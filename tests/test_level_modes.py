@@ -79,6 +79,12 @@ def test_a_mode_without_a_partner_is_nan():
     freq, damp = _paired(np.array([59.0]), np.array([0.01]), np.array([20.0, 60.0]))
     np.testing.assert_array_equal(freq, [np.nan, 59.0])
     np.testing.assert_array_equal(damp, [np.nan, 0.01])
+    # a model that lacks the 6.6 Hz mode and has one far above: the others
+    # keep their partners (the F-16's modes, level 1)
+    ref = np.array([3.457, 5.195, 6.618, 7.320, 9.167])
+    model = np.array([3.450, 5.192, 7.320, 9.165, 18.852])
+    freq, _ = _paired(model, np.arange(5.0), ref)
+    np.testing.assert_array_equal(freq, [3.450, 5.192, np.nan, 7.320, 9.165])
 
 
 def test_levels_must_pair_up():

@@ -144,3 +144,28 @@ def test_hysteresis_loops_overlay_with_labels():
     np.testing.assert_allclose(model.get_xdata(), 0.9 * y[0, :, 0])
     assert (system.get_label(), model.get_label()) == ("system", "model")
     plt.close(ax.figure)
+
+
+def test_level_modes_show_each_modes_shift_and_damping_against_the_level():
+    from sklearn_pnlss.level_modes import LevelModes
+    from sklearn_pnlss.plotting import plot_level_modes
+
+    modes = LevelModes(np.array([1.0, 2.0, 3.0]), np.array([[10.0, 20.0], [9.9, 20.0], [9.8, 19.8]]),
+                       np.array([[0.01, 0.02], [0.015, 0.02], [0.02, 0.03]]),
+                       np.array([[10.0, 20.0], [9.95, 20.1], [9.8, 19.8]]),
+                       np.array([[0.01, 0.02], [0.012, 0.02], [0.02, 0.03]]))
+    shift, damping = plot_level_modes(modes)
+    measured, model = shift.get_lines()[:2]
+    np.testing.assert_allclose(measured.get_xdata(), [1.0, 2.0, 3.0])
+    np.testing.assert_allclose(measured.get_ydata(), [0.0, -1.0, -2.0])
+    np.testing.assert_allclose(model.get_ydata(), [0.0, -0.5, -2.0])
+    np.testing.assert_allclose(damping.get_lines()[1].get_ydata(), [1.0, 1.2, 2.0])
+    assert len(damping.get_lines()) == 4 and model.get_label() == "10 (model)"
+    plt.close(shift.figure)
+    # Measured modes only, on the caller's axes.
+    fig, axes = plt.subplots(1, 2)
+    drawn = plot_level_modes(LevelModes(modes.input_rms, modes.frequencies, modes.damping), axes=axes)
+    assert drawn[0] is axes[0] and len(axes[1].get_lines()) == 2
+    with pytest.raises(ValueError, match="two Axes"):
+        plot_level_modes(modes, axes=axes[:1])
+    plt.close(fig)
