@@ -24,7 +24,8 @@ __all__ = ["LevelModes", "modes_by_level"]
 
 @dataclass
 class LevelModes:
-    """Modes of a linear model of each level; ``str()`` gives the table.
+    """Modes of a linear model of each level; ``str()`` gives the table
+    (levels numbered from 1 in the order given).
 
     Attributes
     ----------
@@ -65,7 +66,7 @@ class LevelModes:
                 if self.model_frequencies is not None:
                     cell += f" (model {self.model_frequencies[i, k]:7.3f} {100 * self.model_damping[i, k]:5.2f} %)"
                 cells.append(cell)
-            lines.append(f"level {i} (input rms {rms:.4g}): " + "  ".join(cells))
+            lines.append(f"level {i + 1} (input rms {rms:.4g}): " + "  ".join(cells))
         return "\n".join(lines)
 
     __repr__ = __str__

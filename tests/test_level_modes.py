@@ -61,7 +61,7 @@ def test_a_linear_structure_gives_its_own_modes_at_every_level_and_the_model_its
     np.testing.assert_allclose(modes.model_frequencies, [[21.0, 59.0]] * 2, rtol=1e-4)
     np.testing.assert_allclose(modes.model_damping, [[0.03, 0.01]] * 2, rtol=1e-3)
     table = str(modes)
-    assert "level 1 (input rms 3)" in table and "model  21.000" in table
+    assert "level 2 (input rms 3)" in table and "model  21.000" in table
     assert modes.to_dict()["model_frequencies"][0][0] == pytest.approx(21.0, rel=1e-4)
 
 
