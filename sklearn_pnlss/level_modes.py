@@ -165,6 +165,6 @@ def modes_by_level(X_levels, y_levels, estimator=None, *, n_states, period, fs=N
     if estimator is not None:
         # each level's model modes against that level's measured ones, which
         # have moved from the first level's
-        paired = [_paired(f, d, np.where(np.isnan(fl), r, fl)) for (f, d), fl, r in zip(model, freq, [ref] * len(freq))]
+        paired = [_paired(f, d, np.where(np.isnan(measured), ref, measured)) for (f, d), measured in zip(model, freq)]
         out.model_frequencies, out.model_damping = map(np.array, zip(*paired))
     return out
