@@ -201,6 +201,19 @@ def load(data_dir):
     return X, y, test
 
 
+def decoupled_estimator(n_states, n_branches, degree, *, branch_basis="powers", n_init=2, max_iter=50,
+                        weighting="relative", output_branches=False, random_state=0):
+    """The decoupled model this benchmark fits from the linear start
+    (``--decoupled``), unfitted: random branches, the period of the
+    multisines, both cores for its starts."""
+    from sklearn_pnlss import DecoupledPNLSSRegressor
+
+    return DecoupledPNLSSRegressor(n_states, n_branches=n_branches, degree=degree, branch_basis=branch_basis,
+                                   init="random", n_init=n_init, max_iter=max_iter, period=8192, n_jobs=2,
+                                   weighting=weighting, output_branches=output_branches,
+                                   random_state=random_state)
+
+
 def nrmse_of(prediction, y):
     """NRMSE per output of ``prediction`` against ``y`` (samples, outputs)."""
     return np.sqrt(np.mean((prediction - y) ** 2, axis=0) / np.mean(y**2, axis=0))
@@ -577,7 +590,7 @@ def main(argv=None):
     args.weighting = None if args.weighting == "none" else args.weighting
     args.also_weighting = [None if w == "none" else w for w in args.also_weighting]
 
-    from sklearn_pnlss import BLAEstimator, DecoupledPNLSSRegressor
+    from sklearn_pnlss import BLAEstimator
     from sklearn_pnlss.datasets import load_f16
 
     X, y, test = load(args.data_dir)
@@ -611,11 +624,9 @@ def main(argv=None):
         dsettings = {"n_states": ns, "n_branches": r, "degree": d, "branch_basis": args.branch_basis, "init": "random",
                      "n_init": args.n_init, "max_iter": args.decoupled_iter, "weighting": weighting,
                      "random_state": seed, "output_branches": args.output_branches}
-        decoupled = DecoupledPNLSSRegressor(ns, n_branches=r, degree=d, branch_basis=args.branch_basis,
-                                            init="random", n_init=args.n_init,
-                                            max_iter=args.decoupled_iter, period=8192, n_jobs=2,
-                                            weighting=weighting, output_branches=args.output_branches,
-                                            random_state=seed)
+        decoupled = decoupled_estimator(ns, r, d, branch_basis=args.branch_basis, n_init=args.n_init,
+                                        max_iter=args.decoupled_iter, weighting=weighting,
+                                        output_branches=args.output_branches, random_state=seed)
         if ns not in linear:
             t0 = time.perf_counter()
             linear[ns] = BLAEstimator(ns, period=8192, fs=400.0).fit(X, y), time.perf_counter() - t0

@@ -30,13 +30,14 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _bench_utils import REPO, RESULTS, header, write_results  # noqa: E402
 
-from sklearn_pnlss import BLAEstimator, DecoupledPNLSSRegressor  # noqa: E402
+from bench_f16 import TRAIN_LEVELS, decoupled_estimator  # noqa: E402
+
+from sklearn_pnlss import BLAEstimator  # noqa: E402
 from sklearn_pnlss.datasets import load_f16  # noqa: E402
 from sklearn_pnlss.level_modes import modes_by_level  # noqa: E402
 from sklearn_pnlss.metrics import nrmse_by_band  # noqa: E402
 
 LEVELS = tuple(range(1, 8))
-TRAIN_LEVELS = (1, 3, 5, 7)
 FS, PERIOD, BAND_HZ = 400.0, 8192, (2.0, 15.5)
 
 
@@ -48,10 +49,7 @@ def fit_best_model(data):
     X = np.concatenate([data[lv].X for lv in TRAIN_LEVELS])
     y = np.concatenate([data[lv].y for lv in TRAIN_LEVELS])
     start = BLAEstimator(18, period=PERIOD, fs=FS).fit(X, y)
-    model = DecoupledPNLSSRegressor(18, n_branches=3, degree=5, branch_basis="signed_powers", init="random",
-                                    n_init=2, max_iter=50, period=PERIOD, n_jobs=2, weighting="relative",
-                                    random_state=0)
-    return model.fit(start.transform(X), y)
+    return decoupled_estimator(18, 3, 5, branch_basis="signed_powers").fit(start.transform(X), y)
 
 
 def misfit(force, frequencies, power):

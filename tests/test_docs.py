@@ -379,13 +379,15 @@ def _f16_decoupled_name(seed=0, degree=3, basis="powers"):
             + (f", random_state={seed}" if seed else ""))
 
 
-def _f16_branches(basis, degree, seed=0, filters=False):
+def _f16_branches(basis, degree, seed=0, filters=False, output_branches=False):
     """The 18-state decoupled model with three branches of ``degree`` in
     ``basis`` (draw ``seed``), alone or with the gated filters:
     f16_in_band.json (powers, degree 3), f16_degree5.json (powers, degree
-    5), f16_signed.json (signed powers)."""
-    results = _results({("powers", 3): "f16_in_band", ("powers", 5): "f16_degree5"}.get((basis, degree), "f16_signed"))
-    name = _f16_decoupled_name(seed, degree, basis)
+    5), f16_signed.json (signed powers); with ``output_branches``,
+    f16_output_branches.json (signed powers of degree 5)."""
+    results = _results("f16_output_branches" if output_branches else
+                       {("powers", 3): "f16_in_band", ("powers", 5): "f16_degree5"}.get((basis, degree), "f16_signed"))
+    name = _f16_decoupled_name(seed, degree, basis) + (", output branches" if output_branches else "")
     return next(r for r in results["models"] + results["draws"]
                 if r["model"]["estimator"] == (f"AboveBandRegressor({name})" if filters else name))
 
@@ -408,15 +410,6 @@ def _f16_branch_row(basis, degree):
     return [*(v for seed in range(3) for v in (_f16_branches(basis, degree, seed)["mean_nrmse"],
                                                _f16_branches(basis, degree, seed)["mean_nrmse_sweeps"])),
             *(_f16_branches(basis, degree, seed, filters=True)["mean_nrmse"] for seed in range(3))]
-
-
-def _f16_output_branches(seed, filters=False):
-    """Mean test NRMSE of the 18-state model in signed powers of degree 5
-    with output branches, draw ``seed`` (f16_output_branches.json)."""
-    name = _f16_decoupled_name(seed, 5, "signed_powers") + ", output branches"
-    results = _results("f16_output_branches")
-    return next(r["mean_nrmse"] for r in results["models"] + results["draws"]
-                if r["model"]["estimator"] == (f"AboveBandRegressor({name})" if filters else name))
 
 
 def _level_model():
@@ -1412,8 +1405,8 @@ FIGURES = [
                     _results("f16_sweeps_signed")["with_sweeps"][0]["fit_s"]]),
     Figure(R, "add nothing: 0.167, 0.184 and 0.179 over the three draws (0.148, 0.163 and 0.157 with the filters), "
               "against 0.173, 0.173 and 0.180 without", OUTPUT_BRANCHES,
-           lambda: [*(_f16_output_branches(seed) for seed in range(3)),
-                    *(_f16_output_branches(seed, filters=True) for seed in range(3)),
+           lambda: [*(_f16_branches("signed_powers", 5, seed, filters, output_branches=True)["mean_nrmse"]
+                      for filters in (False, True) for seed in range(3)),
                     *(_f16_branches("signed_powers", 5, seed)["mean_nrmse"] for seed in range(3))]),
     Figure(R, "at every level the model has the 7.3 Hz mode within 0.004 Hz of the measured one, but of level 2's "
               "error in the band (0.089 / 0.111 / 0.113) that mode holds 63 to 74 % of the power (0.071 / 0.091 / "
