@@ -156,6 +156,37 @@ def test_same_output_as_the_expanded_pnlss(n, m, p, output_branches):
     assert np.abs(linear.simulate(U)[0] - Y).max() > 1e-3 * np.abs(Y).max()
 
 
+def _one_step_jacobian(model, eps=1e-6):
+    """d x(1) / d x(0) at rest, by central differences of one step."""
+    n, m = model.n_states, model.B.shape[1]
+    columns = []
+    for j in range(n):
+        step = eps * np.eye(n)[j]
+        ahead, behind = (model.simulate_states(np.zeros((2, m)), x0=sign * step)[1] for sign in (1, -1))
+        columns.append((ahead - behind) / (2 * eps))
+    return np.column_stack(columns)
+
+
+@pytest.mark.parametrize("signed", [False, True])
+def test_state_matrix_at_rest_is_the_step_jacobian_at_rest(signed):
+    rng = np.random.default_rng(8)
+    model = _random_model(rng, n=4, m=2, p=2, r=3, d=4, signed=signed)
+    at_rest = model.state_matrix_at_rest()
+    # the branches' linear terms add to A (the higher powers vanish at rest)
+    np.testing.assert_allclose(at_rest, model.A + model.Wx @ np.diag(model.G[:, 0]) @ model.V[:4].T, atol=1e-14)
+    assert np.abs(at_rest - model.A).max() > 1e-2
+    np.testing.assert_allclose(at_rest, _one_step_jacobian(model), atol=1e-8)
+    if not signed:  # the same model written as a polynomial with its degree-1 monomials
+        np.testing.assert_allclose(_as_pnlss(model, rng).state_matrix_at_rest(), at_rest, atol=1e-10)
+    # a stable A whose branch slope at rest moves a pole past the unit circle
+    model.A = np.diag([0.9, 0.5, 0.4, 0.3])
+    model.Wx[:] = 0.0
+    model.Wx[0, 0], model.V[:, 0], model.G[0, 0] = 1.0, np.eye(6)[0], 0.2  # x1(t+1) = 1.1 x1 + ...
+    assert np.max(np.abs(np.linalg.eigvals(model.A))) < 1 and not model.stable_at_rest()
+    model.G[0, 0] = 0.05
+    assert model.stable_at_rest()
+
+
 @pytest.mark.parametrize("output_branches, linear_in_E", [(False, False), (True, False), (False, True)])
 def test_start_recovers_an_exactly_decoupled_pnlss(output_branches, linear_in_E):
     rng = np.random.default_rng(5)

@@ -25,6 +25,7 @@ __all__ = ["StateSpaceRegressorBase"]
 # Constraints of the fit parameters every subclass has (see the docstring).
 FIT_PARAMETER_CONSTRAINTS = {
     "range_margin": [Interval(Real, 0, None, closed="left")],
+    "stable_at_rest": ["boolean"],
     "period": [Interval(Integral, 2, None, closed="left"), None],
     "average_periods": ["boolean"],
     "weighting": [None, Options(str, {"relative", "band", "noise"})],
@@ -48,7 +49,7 @@ class StateSpaceRegressorBase(SignalRegressorBase):
     ``_export``. The fitted model is ``model_``. Subclasses need the
     parameters ``period``, ``average_periods``, ``weighting``, ``band``,
     ``max_iter``, ``tol``, ``n_transient``, ``extrapolation``,
-    ``range_margin`` and ``verbose``.
+    ``range_margin``, ``stable_at_rest`` and ``verbose``.
     """
 
     @validates_parameters
@@ -136,7 +137,8 @@ class StateSpaceRegressorBase(SignalRegressorBase):
         return FitSettings(
             period=self.period_, average_periods=self.average_periods, weighting=self.weighting,
             band=self.band, max_iter=self.max_iter, tol=self.tol, n_transient=self.n_transient,
-            extrapolation=self.extrapolation, range_margin=self.range_margin, verbose=self.verbose,
+            extrapolation=self.extrapolation, range_margin=self.range_margin,
+            stable_at_rest=self.stable_at_rest, verbose=self.verbose,
             n_threads=self._segment_threads(),
         )
 
@@ -185,6 +187,14 @@ class StateSpaceRegressorBase(SignalRegressorBase):
                 f"The fitted linear part A has spectral radius {rho:.4g} >= 1: holding the "
                 "nonlinearity at its trusted range no longer bounds the state. Pass validation "
                 "signals (X_val, y_val) or fewer iterations (max_iter).", UserWarning, stacklevel=4,
+            )
+        if not fit.model.normalised.stable_at_rest():
+            rest = np.max(np.abs(np.linalg.eigvals(fit.model.normalised.state_matrix_at_rest())))
+            warnings.warn(
+                f"The fitted model is unstable at rest (its state equation linearised at rest has spectral "
+                f"radius {rest:.4g} >= 1): with no input, or one below the levels it was fitted at, it "
+                "oscillates by itself. Pass stable_at_rest=True to refuse such steps (the start must be "
+                "stable at rest).", UserWarning, stacklevel=4,
             )
         if fit.new_input_runaway is not None:
             ranking = "the latest" if fit.validation_history is None else "the best on the validation signals"

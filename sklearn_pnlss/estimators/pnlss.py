@@ -125,6 +125,17 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         (whose peaks take the states slightly past their training range):
         0.05 gives the plain polynomial's -94.23 dB (states and input), 0
         gives -93.97 dB.
+    stable_at_rest : bool, default=False
+        Refuse every optimiser step that makes the model unstable at rest
+        (its state equation linearised at ``x = 0``, ``u = 0``, branch or
+        monomial slopes there included, with a spectral radius of 1 or
+        more), as one whose simulation diverges is refused; the start must
+        be stable at rest. Such a model oscillates by itself under no input
+        or one below the levels it was fitted at, which no passive
+        structure does; a fit may go there to shape a damping that grows
+        with the amplitude (what it costs on the F-16: see
+        :class:`~sklearn_pnlss.DecoupledPNLSSRegressor`). False: a fitted
+        model unstable at rest is reported by a warning.
     max_iter : int, default=100
         Levenberg-Marquardt iterations at most (of the last stage when the
         degrees grow; each earlier one runs at most ``max_iter // 2``).
@@ -239,6 +250,7 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         grow_degrees="auto",
         extrapolation="hold",
         range_margin=0.05,
+        stable_at_rest=False,
         max_iter=100,
         tol=1e-8,
         n_transient="auto",
@@ -258,6 +270,7 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         self.grow_degrees = grow_degrees
         self.extrapolation = extrapolation
         self.range_margin = range_margin
+        self.stable_at_rest = stable_at_rest
         self.max_iter = max_iter
         self.tol = tol
         self.n_transient = n_transient

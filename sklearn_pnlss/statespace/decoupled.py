@@ -155,6 +155,15 @@ class DecoupledModel(StateSpaceModel):
             "knots": None if self.knots is None else self.knots.copy(),
         }
 
+    def state_matrix_at_rest(self):
+        """``A + Wx diag(g'(0)) V_x^T``: the branches' slopes at rest (their
+        linear terms, which the fit may move) add to ``A``."""
+        from ..decoupling.branches import branch_derivatives  # the decoupling package imports this module
+
+        slope = branch_derivatives(self.G, np.zeros((1, self.n_branches)), self.bounds, self.linear_extrapolation,
+                                   self.knots, self.signed)[0]
+        return self.A + (self.Wx * slope) @ self.V[: self.n_states].T
+
     @property
     def n_null_directions(self):
         """n^2 for the state basis, and per branch: the scale shared by W

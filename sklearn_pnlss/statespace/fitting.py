@@ -88,6 +88,7 @@ class FitSettings:
     n_transient: int | str = "auto"
     extrapolation: str = "hold"
     range_margin: float = 0.0
+    stable_at_rest: bool = False
     verbose: int = 0
     n_threads: int = 1
     new_inputs: tuple = field(default=(), compare=False, repr=False)
@@ -282,7 +283,10 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
     not run away on any of them either; else an earlier one in that order
     (back in time, or down the validation ranking) that does not, and the
     fit reports it (the training data are few for the model structure).
-    Each step drops the
+    With ``settings.stable_at_rest``, a start stable at rest
+    (:meth:`~sklearn_pnlss.statespace.model_base.StateSpaceModel.stable_at_rest`)
+    gives a fit stable at rest: a trial step that is not counts as failed,
+    like one whose simulation diverges. Each step drops the
     model's ``n_null_directions`` (parameter directions that leave the
     output unchanged). Pure (nothing is modified), so that several starts
     can run in parallel threads.
@@ -349,6 +353,21 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
             msg = f"iteration {done + it:4d}  cost {cost_db:8.2f} dB  lambda {lam:9.3g}"
             print(msg + (f"  validation {v:8.2f} dB" if validation is not None else ""), flush=True)
 
+    # With settings.stable_at_rest, a start that returns to rest (the
+    # linear start of a passive structure) keeps doing so: a step that
+    # makes the state equation at rest unstable fails like one whose
+    # simulation diverges. Without it, the fit of a joint whose damping
+    # grows with the amplitude may push a mode's damping at rest below
+    # zero, the branches' higher powers damping it back at the fitted
+    # levels: the model then rings by itself under small forces.
+    keep_at_rest = settings.stable_at_rest and model.stable_at_rest()
+
+    def admissible_residual(objective, theta):
+        trial = model.with_theta(theta)
+        if keep_at_rest and not trial.stable_at_rest():
+            return None
+        return objective.residual(trial)
+
     theta = model.theta
     for stage, objective in enumerate(objectives):
         n_res = sum(seg.Y.size for seg in objective.segments)
@@ -363,7 +382,7 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
         # moved EMPS's PNLSS model of the increments from 3.39 to 10.4 mm
         # on its test split by round-off alone: that fit is fragile)
         result = levenberg_marquardt(
-            lambda th, obj=objective: obj.residual(model.with_theta(th)),
+            lambda th, obj=objective: admissible_residual(obj, th),
             lambda th, obj=objective: obj.normal_equations(model.with_theta(th)),
             theta, n_drop=model.n_null_directions, max_iter=max_iter, tol=settings.tol, callback=callback,
             basis=basis,

@@ -90,6 +90,19 @@ class StateSpaceModel:
         from each Levenberg-Marquardt step): the n^2 of the state basis."""
         return self.n_states**2
 
+    def state_matrix_at_rest(self):
+        """The state equation's Jacobian in ``x`` at rest (``x = 0``,
+        ``u = 0``): ``A`` plus whatever linear term the nonlinearity has
+        there. Its spectral radius says whether the model, left alone,
+        returns to rest: a passive structure does, a model with a radius
+        above 1 oscillates by itself below the amplitudes it was fitted at."""
+        return self.A
+
+    def stable_at_rest(self):
+        """Whether the spectral radius of :meth:`state_matrix_at_rest` is
+        below 1."""
+        return bool(np.max(np.abs(np.linalg.eigvals(self.state_matrix_at_rest())), initial=0.0) < 1.0)
+
     def step_basis(self, states_inputs):
         """Basis in which Levenberg-Marquardt solves its steps (see
         :func:`~sklearn_pnlss.statespace.levenberg_marquardt.levenberg_marquardt`),

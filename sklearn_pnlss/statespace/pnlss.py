@@ -68,6 +68,13 @@ class PNLSSModel(StateSpaceModel):
 
     with_trusted_range.__doc__ = StateSpaceModel.with_trusted_range.__doc__ + " The inputs stay unbounded."
 
+    def state_matrix_at_rest(self):
+        """``A`` plus the monomials of degree 1 in a state (the others
+        vanish with their derivatives at rest)."""
+        n = self.A.shape[0]
+        linear = (self.exE.sum(axis=1) == 1) & (self.exE[:, :n].sum(axis=1) == 1)
+        return self.A + self.E[:, linear] @ self.exE[linear, :n]
+
     def _rescaled_nonlinearity(self, state_scale, input_scale, output_scale):
         """E, F and bounds for :meth:`rescaled`."""
         var_scale = np.concatenate([state_scale, input_scale])
