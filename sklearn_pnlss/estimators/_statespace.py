@@ -192,7 +192,7 @@ class StateSpaceRegressorBase(SignalRegressorBase):
             rest = np.max(np.abs(np.linalg.eigvals(fit.model.normalised.state_matrix_at_rest())))
             warnings.warn(
                 f"The fitted model is unstable at rest (its state equation linearised at rest has spectral "
-                f"radius {rest:.4g} >= 1): with no input, or one below the levels it was fitted at, it "
+                f"radius {rest:.6f} >= 1): with no input, or one below the levels it was fitted at, it "
                 "oscillates by itself. Pass stable_at_rest=True to refuse such steps (the start must be "
                 "stable at rest).", UserWarning, stacklevel=4,
             )

@@ -160,10 +160,10 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         structure does; a fit may go there to shape a damping that grows
         with the amplitude. Measured on the F-16 (18 states, three branches
         of degree 5 in signed powers, ``benchmarks/f16_error_budget.py``):
-        two of three draws end unstable at rest, the first ringing with no
-        force at a tenth of its level-1 response; refused, their mean test
-        NRMSE goes from 0.152 and 0.160 to 0.172 and 0.165 (the third, stable
-        at rest, is unchanged). False: a fitted model unstable at rest is
+        two of three draws end unstable at rest, one ringing with no force
+        at about a tenth of its level-1 response; refused, their mean test
+        NRMSE goes from 0.151 and 0.160 to 0.172 and 0.165 (the draw stable
+        at rest is unchanged). False: a fitted model unstable at rest is
         reported by a warning.
     average_periods, weighting, band, max_iter, tol, n_transient
         As in :class:`PNLSSRegressor`, for the decoupled model's fit.

@@ -126,15 +126,11 @@ class PNLSSRegressor(StateSpaceRegressorBase):
         0.05 gives the plain polynomial's -94.23 dB (states and input), 0
         gives -93.97 dB.
     stable_at_rest : bool, default=False
-        Refuse every optimiser step that makes the model unstable at rest
-        (its state equation linearised at ``x = 0``, ``u = 0``, branch or
-        monomial slopes there included, with a spectral radius of 1 or
-        more), as one whose simulation diverges is refused; the start must
-        be stable at rest. Such a model oscillates by itself under no input
-        or one below the levels it was fitted at, which no passive
-        structure does; a fit may go there to shape a damping that grows
-        with the amplitude (what it costs on the F-16: see
-        :class:`~sklearn_pnlss.DecoupledPNLSSRegressor`). False: a fitted
+        Refuse every optimiser step after which the model, left alone,
+        would oscillate by itself (its state equation linearised at rest
+        has a spectral radius of 1 or more; the start must not). Why a fit
+        goes there, and what refusing costs on the F-16: see
+        :class:`~sklearn_pnlss.DecoupledPNLSSRegressor`. False: a fitted
         model unstable at rest is reported by a warning.
     max_iter : int, default=100
         Levenberg-Marquardt iterations at most (of the last stage when the
