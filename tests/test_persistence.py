@@ -31,6 +31,18 @@ def test_each_estimator_round_trips_on_its_own(small_pipeline, small_data, tmp_p
         np.testing.assert_array_equal(loaded.predict(small_data.X_val), est.predict(small_data.X_val))
 
 
+def test_a_model_pickled_before_a_parameter_existed_loads_with_its_default(small_pipeline, small_data):
+    import pickle
+
+    for est in small_pipeline[1:]:
+        state = est.__getstate__()
+        del state["stable_at_rest"]  # as a model pickled before the parameter came
+        old = type(est).__new__(type(est))
+        old.__setstate__(pickle.loads(pickle.dumps(state)))
+        assert old.get_params()["stable_at_rest"] is False and repr(old)
+        np.testing.assert_array_equal(old.predict(small_data.X_val), est.predict(small_data.X_val))
+
+
 def test_header_records_the_versions(small_pipeline, tmp_path):
     import sklearn
 

@@ -2,6 +2,8 @@
 convention, periodic steady state, the rms-dB score, scikit-learn tags, and
 the fitted model as an object to read (summary, export of the linear
 part)."""
+import inspect
+
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils import TransformerTags
 from sklearn.utils.validation import check_is_fitted
@@ -40,6 +42,15 @@ class DynamicRegressorMixin(RegressorMixin):
         if sample_weight is not None:
             raise ValueError("sample_weight is not supported by dynamic models; pass None.")
         return -rms_error(y, self.predict(X), db=True)
+
+    def __setstate__(self, state):
+        # A model pickled before one of its parameters existed loads with
+        # that parameter at its default (a new parameter defaults to the
+        # behaviour before it), so get_params, clone and repr work on it.
+        super().__setstate__(state)
+        for name, parameter in inspect.signature(type(self).__init__).parameters.items():
+            if parameter.default is not inspect.Parameter.empty and name not in self.__dict__:
+                setattr(self, name, parameter.default)
 
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()
