@@ -355,8 +355,8 @@ def entry(name, settings, model, test, fit_s, extra=None):
     if hasattr(model, "cost_history_"):  # the fit's own criterion, comparable across state counts
         row["train_cost_db"] = float(10 * np.log10(model.cost_history_[-1]))
     state_model = getattr(getattr(model, "model_", None), "normalised", None)
-    if hasattr(state_model, "state_matrix_at_rest"):  # at most 1 for a model that returns to rest
-        row["radius_at_rest"] = float(np.max(np.abs(np.linalg.eigvals(state_model.state_matrix_at_rest()))))
+    if hasattr(state_model, "radius_at_rest"):  # below 1 for a model that returns to rest
+        row["radius_at_rest"] = state_model.radius_at_rest()
     row.update(extra or {})
     levels = "  ".join(f"L{lv} " + "/".join(f"{v:.3f}" for v in row["nrmse"][str(lv)]) for lv in TEST_LEVELS)
     print(f"{name:34s} mean {mean:.3f} (from rest {row['mean_nrmse_official']:.3f})  {levels}  fit {fit_s:7.1f} s  "

@@ -75,8 +75,7 @@ def at_rest(model, quiet):
     force = np.zeros((250_000, 1))
     force[:20] = 1.0
     ringing = model.predict(force)[-50_000:]
-    radius = np.max(np.abs(np.linalg.eigvals(model.model_.normalised.state_matrix_at_rest())))
-    return {"radius": float(radius),
+    return {"radius": model.model_.normalised.radius_at_rest(),
             "ringing_over_quietest": (np.sqrt(np.mean(ringing**2, axis=0)) /
                                       np.sqrt(np.mean(quiet.y[0] ** 2, axis=0))).tolist()}
 

@@ -188,8 +188,8 @@ class StateSpaceRegressorBase(SignalRegressorBase):
                 "nonlinearity at its trusted range no longer bounds the state. Pass validation "
                 "signals (X_val, y_val) or fewer iterations (max_iter).", UserWarning, stacklevel=4,
             )
-        if not fit.model.normalised.stable_at_rest():
-            rest = np.max(np.abs(np.linalg.eigvals(fit.model.normalised.state_matrix_at_rest())))
+        rest = fit.model.normalised.radius_at_rest()
+        if rest >= 1.0:
             warnings.warn(
                 f"The fitted model is unstable at rest (its state equation linearised at rest has spectral "
                 f"radius {rest:.6f} >= 1): with no input, or one below the levels it was fitted at, it "

@@ -98,10 +98,13 @@ class StateSpaceModel:
         above 1 oscillates by itself below the amplitudes it was fitted at."""
         return self.A
 
+    def radius_at_rest(self):
+        """The spectral radius of :meth:`state_matrix_at_rest`."""
+        return float(np.max(np.abs(np.linalg.eigvals(self.state_matrix_at_rest())), initial=0.0))
+
     def stable_at_rest(self):
-        """Whether the spectral radius of :meth:`state_matrix_at_rest` is
-        below 1."""
-        return bool(np.max(np.abs(np.linalg.eigvals(self.state_matrix_at_rest())), initial=0.0) < 1.0)
+        """Whether :meth:`radius_at_rest` is below 1."""
+        return self.radius_at_rest() < 1.0
 
     def step_basis(self, states_inputs):
         """Basis in which Levenberg-Marquardt solves its steps (see
