@@ -46,6 +46,7 @@ def all_estimators():
 FAST_SETTINGS = {
     "PNLSSRegressor": {"max_iter": 2},
     "AboveBandRegressor": {"cutoff": 0.25, "n_taps": 4},
+    "AveragedRegressor": {"regressor": PNLSSRegressor(max_iter=2), "n_estimators": 2},
     "DecoupledPNLSSRegressor": {
         "n_branches": 1, "degree": 3, "n_init": 1, "n_points": 50, "max_iter": 2,
         "start_model": PNLSSRegressor(max_iter=2),
