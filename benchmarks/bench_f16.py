@@ -241,17 +241,27 @@ def nrmse_official(model, test):
     deviation; the mean over levels and outputs. A model with its response
     above the band (``AboveBandRegressor``) adds it in steady state to its
     state-space model's simulation from rest (the FIRs' 0.5 s transient
-    left out of 184 s)."""
+    left out of 184 s); an ``AveragedRegressor`` averages its members'
+    simulations so."""
     from sklearn_pnlss.metrics import nrmse as field_nrmse
 
     values = []
     for d in test.values():
-        base = getattr(model, "regressor_", model)
-        pred = base.model_.simulate(d.X_raw[0], None)
-        if base is not model:
-            pred = pred + model.predict(d.X_raw[0]) - base.predict(d.X_raw[0])
+        pred = prediction_from_rest(model, d.X_raw[0])
         values += [field_nrmse(d.y_raw[0, :, k], pred[:, k], skip=50) for k in range(pred.shape[1])]
     return float(np.mean(values))
+
+
+def prediction_from_rest(model, U):
+    """A fitted model's simulation of one whole record ``U`` from rest, as
+    ``nrmse_official`` scores it."""
+    if hasattr(model, "estimators_"):  # AveragedRegressor
+        return np.mean([prediction_from_rest(member, U) for member in model.estimators_], axis=0)
+    base = getattr(model, "regressor_", model)
+    pred = base.model_.simulate(U, None)
+    if base is not model:
+        pred = pred + model.predict(U) - base.predict(U)
+    return pred
 
 
 def out_of_band_floor(test):
@@ -343,6 +353,18 @@ def nrmse_new_waveform(model):
     return per_level, float(np.mean([v for row in per_level.values() for v in row]))
 
 
+def radius_at_rest(model):
+    """The spectral radius of a fitted model's state equation linearised at
+    rest (of the state-space model inside a wrapper; of an average, its
+    members' largest: their parallel connection has all their poles), or
+    None for a model without one."""
+    if hasattr(model, "estimators_"):  # AveragedRegressor
+        radii = [radius_at_rest(member) for member in model.estimators_]
+        return None if None in radii else max(radii)
+    state_model = getattr(getattr(getattr(model, "regressor_", model), "model_", None), "normalised", None)
+    return state_model.radius_at_rest() if hasattr(state_model, "radius_at_rest") else None
+
+
 def entry(name, settings, model, test, fit_s, extra=None):
     per_level, mean, by_band = nrmse(model, test)
     sweep_levels, sweep_mean = nrmse_new_waveform(model)
@@ -354,9 +376,9 @@ def entry(name, settings, model, test, fit_s, extra=None):
            "n_nonlinear_params": int(getattr(model, "n_nonlinear_params_", 0))}
     if hasattr(model, "cost_history_"):  # the fit's own criterion, comparable across state counts
         row["train_cost_db"] = float(10 * np.log10(model.cost_history_[-1]))
-    state_model = getattr(getattr(model, "model_", None), "normalised", None)
-    if hasattr(state_model, "radius_at_rest"):  # below 1 for a model that returns to rest
-        row["radius_at_rest"] = state_model.radius_at_rest()
+    radius = radius_at_rest(model)
+    if radius is not None:  # below 1 for a model that returns to rest
+        row["radius_at_rest"] = radius
     row.update(extra or {})
     levels = "  ".join(f"L{lv} " + "/".join(f"{v:.3f}" for v in row["nrmse"][str(lv)]) for lv in TEST_LEVELS)
     print(f"{name:34s} mean {mean:.3f} (from rest {row['mean_nrmse_official']:.3f})  {levels}  fit {fit_s:7.1f} s  "

@@ -85,6 +85,7 @@ def test_a_network_follows_the_side_the_joint_knocks_on():
     assert model.explained_fraction_[0] > 0.8  # 0.89
     # 4 gate coefficients; 8 FIR taps, or a window of 8 samples of 2 channels into 16 units and out
     assert (linear.n_map_params_, model.n_map_params_) == (4 + 8, 4 + 8 * 2 * 16 + 16 + 16 + 1)
+    assert linear.n_params_ == linear.regressor_.n_params_ + linear.n_map_params_
     assert above(16)[0] == network  # random_state fixes the network's fit
     # two networks from different starts, averaged: their errors partly cancel
     averaged, pair = above(16, n_networks=2, n_jobs=2)

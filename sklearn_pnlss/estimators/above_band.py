@@ -186,6 +186,8 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         Only with ``hidden_units``.
     n_map_params_ : int
         The coefficients of the gate and of the FIR filters or the network.
+    n_params_ : int
+        The state-space model's parameters and ``n_map_params_``.
     above_band_rms_ : ndarray of shape (n_outputs,)
         The rms of the regressor's training error above ``cutoff``.
     explained_fraction_ : ndarray of shape (n_outputs,)
@@ -322,6 +324,7 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
                 self.hidden_units, self.alpha, self.n_networks, self.random_state, self.n_jobs)
             self.n_map_params_ = self.gate_coef_.size + sum(
                 w.size for network in self.networks_ for w in network.coefs_ + network.intercepts_)
+        self.n_params_ = _state_space_step(self.regressor_).n_params_ + self.n_map_params_
         after = [r - self._apply_map(i, s.periodic) for s, i, r in zip(signals, inputs, residual)]
         self.explained_fraction_ = 1.0 - np.mean(np.vstack(after) ** 2, axis=0) / before_power
         return self

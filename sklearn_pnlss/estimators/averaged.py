@@ -36,6 +36,13 @@ def random_state_keys(estimator):
                   if key == "random_state" or key.endswith("__random_state"))
 
 
+def _n_params(member):
+    """A fitted member's parameter count (of a Pipeline: its last step's,
+    the model; the stages before it only start it)."""
+    step = member.steps[-1][1] if hasattr(member, "steps") else member
+    return getattr(step, "n_params_", 0)
+
+
 def _fit_member(regressor, seed, X, y, fit_params):
     member = clone(regressor).set_params(**{key: seed for key in random_state_keys(regressor)})
     return member.fit(X, y, **fit_params)
@@ -82,7 +89,7 @@ class AveragedRegressor(DynamicRegressorMixin, BaseEstimator):
     seeds_ : ndarray of shape (n_estimators,)
         The seed each member was fitted with.
     n_params_ : int
-        The members' parameters together (0 when they do not count theirs).
+        The members' parameters together (of a Pipeline, its last step's).
     n_features_in_ : int
         Number of inputs.
     n_outputs_ : int
@@ -163,7 +170,7 @@ class AveragedRegressor(DynamicRegressorMixin, BaseEstimator):
         self.estimators_ = Parallel(n_jobs=self.n_jobs, prefer="threads")(
             delayed(_fit_member)(regressor, int(seed), X, y, fit_params) for seed in self.seeds_)
         self.n_outputs_ = y_list[0].shape[1]
-        self.n_params_ = int(sum(getattr(member, "n_params_", 0) for member in self.estimators_))
+        self.n_params_ = int(sum(_n_params(member) for member in self.estimators_))
         self._y_was_1d = signal_layout(y).kind == "1d"
         return self
 
