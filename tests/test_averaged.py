@@ -49,6 +49,11 @@ def test_the_mean_of_the_members_in_every_layout(bouc_wen):
     as_list = pipeline.predict([X_new[0], X_new[0, :4096]])
     assert isinstance(as_list, list) and as_list[1].shape == (4096, 1)
     np.testing.assert_allclose(as_list[0], np.mean(members, axis=0)[0], rtol=1e-12, atol=0)
+    # a record cut from a longer run: every member starts from the state the measured window shows it
+    cut, window = bouc_wen.X_test_sweep[:, 5000:9000], bouc_wen.y_test_sweep[:, 5000:5100]
+    started = [m.predict(cut, y_init=window) for m in averaged.estimators_]
+    np.testing.assert_allclose(averaged.predict(cut, y_init=window), np.mean(started, axis=0), rtol=1e-12, atol=0)
+    assert not np.allclose(averaged.predict(cut), averaged.predict(cut, y_init=window))
 
 
 def test_the_first_member_is_the_plain_fit(bouc_wen):

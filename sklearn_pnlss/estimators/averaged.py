@@ -21,7 +21,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from ..utils.handover import training_signals
 from ..utils.parameters import Interval, validates_parameters
-from ..utils.validation import restore_layout, signal_layout, validate_signals
+from ..utils.validation import as_signal_list, restore_layout, signal_layout, validate_signals
 from ._base import DynamicRegressorMixin
 from .decoupled import DecoupledPNLSSRegressor
 
@@ -174,12 +174,17 @@ class AveragedRegressor(DynamicRegressorMixin, BaseEstimator):
         self._y_was_1d = signal_layout(y).kind == "1d"
         return self
 
-    def predict(self, X):
+    def predict(self, X, y_init=None):
         """The mean of the members' simulations.
 
         Parameters
         ----------
         X : signals, as in the regressor's ``predict``
+        y_init : signals or None, default=None
+            The measured outputs over the first samples of each signal,
+            passed on to every member's ``predict`` (each member then starts
+            from the state they show to it; see
+            :meth:`PNLSSRegressor.predict`).
 
         Returns
         -------
@@ -187,8 +192,9 @@ class AveragedRegressor(DynamicRegressorMixin, BaseEstimator):
         """
         check_is_fitted(self)
         X_list, _, layout = validate_signals(self, X, reset=False, min_samples=1)
+        windows = {} if y_init is None else {"y_init": as_signal_list(y_init, name="y_init", min_samples=1)[0]}
         total = [0.0] * len(X_list)
         for member in self.estimators_:
-            predictions = member.predict(X_list)
+            predictions = member.predict(X_list, **windows)
             total = [t + np.asarray(p).reshape(U.shape[0], -1) for t, p, U in zip(total, predictions, X_list)]
         return restore_layout([t / len(self.estimators_) for t in total], layout, squeeze_1d=self._y_was_1d)
