@@ -6,10 +6,11 @@ polynomial's Jacobian), the same data give models that fit the training
 signals about equally well and differ most where the training signals
 say least, between the fitted amplitudes and on waveforms they do not
 hold. Their errors there are partly independent, so their mean simulates
-a new input better than any one of them, the way a bagged ensemble
+a new input better than a typical one of them, the way a bagged ensemble
 predicts better than its members. The mean of models is a model too: the
 parallel connection of the members, a state-space model with their states
-side by side, whose output is the mean of theirs.
+side by side, whose output is the mean of theirs. It has all their poles,
+so one member that does not return to rest makes the mean so too.
 """
 from numbers import Integral
 
