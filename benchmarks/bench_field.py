@@ -99,7 +99,9 @@ SETUPS = {
                               # other draws of the random starts: the figure's spread
                               **{f"Decoupled PNLSS from the BLA, random_state={k}": {**DECOUPLED_WH, "random_state": k}
                                  for k in (1, 2)},
-                              "Decoupled PNLSS, 2 branches of degree 21 from the start": DECOUPLED_WH_AT_ONCE}),
+                              "Decoupled PNLSS, 2 branches of degree 21 from the start": DECOUPLED_WH_AT_ONCE},
+                   # the three draws above as one model: their simulations averaged
+                   averaged={"Decoupled PNLSS from the BLA, random_state=0, 1, 2 averaged": (DECOUPLED_WH, 3)}),
     "cascaded_tanks": dict(n=2, fs=0.25, offsets=True,
                            pnlss={"degrees": (2, 3), "variables": "states", "equations": "both", "max_iter": 400},
                            # the structures the physics argues against, for the guide's comparison
@@ -118,7 +120,8 @@ def models(name):
     simulated in (one BLAS thread)."""
     from sklearn.pipeline import make_pipeline
 
-    from sklearn_pnlss import BLAEstimator, DecoupledPNLSSRegressor, IntegratedOutputRegressor, PNLSSRegressor
+    from sklearn_pnlss import (AveragedRegressor, BLAEstimator, DecoupledPNLSSRegressor, IntegratedOutputRegressor,
+                               PNLSSRegressor)
 
     setup = SETUPS[name]
     n, fs, offsets, pnlss = setup["n"], setup["fs"], setup["offsets"], setup["pnlss"]
@@ -137,6 +140,10 @@ def models(name):
         rows.append((dec_label, {"n_states": n, "offsets": offsets, **dec},
                      lambda dec=dec: make_pipeline(BLAEstimator(n, fs=fs, offsets=offsets),
                                                    DecoupledPNLSSRegressor(n, **dec))))
+    for avg_label, (dec, k) in setup.get("averaged", {}).items():
+        rows.append((avg_label, {"n_states": n, "offsets": offsets, **dec, "n_estimators": k},
+                     lambda dec=dec, k=k: make_pipeline(BLAEstimator(n, fs=fs, offsets=offsets), AveragedRegressor(
+                         DecoupledPNLSSRegressor(n, **dec), n_estimators=k, random_state=dec["random_state"]))))
     if "integrated" in setup:
         inc, label = setup["integrated"], "PNLSS of the increments, summed"
         rows.append(("BLA of the increments, summed", {"n_states": n, "offsets": offsets, "integrated": True},

@@ -66,9 +66,13 @@ class AveragedRegressor(DynamicRegressorMixin, BaseEstimator):
     ----------
     regressor : estimator or None, default=None
         One of the library's regressors, a Pipeline of them, or a wrapper
-        around one (:class:`AboveBandRegressor`): anything with a
-        ``random_state`` somewhere in its parameters. Cloned for each
-        member. None fits ``DecoupledPNLSSRegressor()``.
+        around one (:class:`AboveBandRegressor`) whose fit starts at random:
+        a :class:`DecoupledPNLSSRegressor` (its branch directions or
+        sampling points). Anything without a ``random_state`` in its
+        parameters is refused; a :class:`PNLSSRegressor` has one, but its
+        fit is deterministic (the seed only draws its check inputs), so
+        its members would all be one model. Cloned for each member. None
+        fits ``DecoupledPNLSSRegressor()``.
     n_estimators : int, default=3
         Number of members.
     n_jobs : int or None, default=None
@@ -103,8 +107,12 @@ class AveragedRegressor(DynamicRegressorMixin, BaseEstimator):
 
     Notes
     -----
-    Measured on the F-16 ground vibration test (``benchmarks/bench_f16.py``
-    ``--averaged``): see the README's F-16 section for the figures.
+    Measured on the F-16 ground vibration test
+    (``benchmarks/f16_averaged.py``; figures in the README's F-16 section
+    and the user guide's decoupling page): the mean of two or three fits
+    simulates the test levels and their sine sweeps better than one fit
+    does, and a member unstable at rest spoils the mean on a sweep from
+    rest, so fit the members with ``stable_at_rest=True``.
 
     Examples
     --------
@@ -163,8 +171,8 @@ class AveragedRegressor(DynamicRegressorMixin, BaseEstimator):
         if not random_state_keys(regressor):
             raise ValueError(
                 f"regressor: {type(regressor).__name__} has no random_state, so every member would be the same "
-                "model. Average a regressor whose fit starts at random (DecoupledPNLSSRegressor, "
-                "PNLSSRegressor, or a Pipeline or wrapper ending in one)."
+                "model. Average a regressor whose fit starts at random (DecoupledPNLSSRegressor, or a Pipeline "
+                "or wrapper ending in one)."
             )
         _, y_list, _ = validate_signals(self, *training_signals(X, y), reset=True)
         self.seeds_ = self._seeds()
