@@ -9,7 +9,7 @@ from sklearn.base import BaseEstimator
 from sklearn.frozen import FrozenEstimator
 
 from sklearn_pnlss import AboveBandRegressor, BLAEstimator, IntegratedOutputRegressor
-from sklearn_pnlss.estimators._gated import above_cutoff, lagged
+from sklearn_pnlss.estimators._gated import above_cutoff, hinges, integral_in_band, lagged, relative_motions
 from sklearn_pnlss.metrics import nrmse_by_band
 
 CUTOFF = 0.1  # cycles per sample
@@ -32,6 +32,18 @@ def test_lagged_holds_each_channel_delayed_circularly_or_from_rest():
         for j in range(3):
             np.testing.assert_array_equal(periodic[:, i, j], np.roll(w[:, i], j))
             np.testing.assert_array_equal(from_rest[:, i, j], np.r_[np.zeros(j), w[:5 - j, i]])
+
+
+def test_motions_are_integrated_in_the_band_differenced_and_hinged():
+    t = np.arange(1000)
+    acc = np.column_stack([np.cos(2 * np.pi * 0.05 * t) + 3.0, 2 * np.cos(2 * np.pi * 0.2 * t)])
+    velocity = integral_in_band(acc, 0.01, 0.1, 1.0, 1)  # the offset and the line above 0.1 dropped
+    np.testing.assert_allclose(velocity[:, 0], np.sin(2 * np.pi * 0.05 * t) / (2 * np.pi * 0.05), atol=1e-9)
+    np.testing.assert_allclose(velocity[:, 1], 0.0, atol=1e-12)
+    m = np.array([[1.0, 4.0, 2.0]])
+    np.testing.assert_array_equal(relative_motions(m), [[1.0, 4.0, 2.0, 3.0, 1.0, -2.0]])  # then 1-0, 2-0, 2-1
+    np.testing.assert_array_equal(hinges(np.array([[3.0], [-3.0], [0.5]]), np.array([2.0]), (1.0,)),
+                                  [[0.5, 0.0], [0.0, -0.5], [0.0, 0.0]])
 
 
 def test_above_cutoff_keeps_exactly_the_lines_above_it():
@@ -150,6 +162,40 @@ def test_a_frozen_regressor_is_kept_and_periodic_signals_are_circular():
     np.testing.assert_allclose(pred[:period], pred[2 * period:], atol=1e-9)
 
 
+def _contacts(rng, n=8192, clearance=1.0):
+    """A force in the band (its content above it faint), a linear response,
+    and a contact that opens past ``clearance`` times the response's rms in
+    either direction: its kinks ring a mode above the band. The force's own
+    content up there does not hold the impacts; the response's does."""
+    spectrum = np.zeros(n // 2 + 1, complex)
+    band = (np.fft.rfftfreq(n) > 0.01) & (np.fft.rfftfreq(n) <= CUTOFF)
+    spectrum[band] = np.exp(2j * np.pi * rng.random(band.sum()))
+    u = np.fft.irfft(spectrum, n) * np.sqrt(n) + 0.01 * rng.standard_normal(n)
+    y = lfilter([0.0, 0.1], [1, -0.9], u)
+    c = clearance * np.sqrt(np.mean(y**2))
+    contact = np.maximum(y - c, 0) + np.minimum(y + c, 0)
+    ring = lfilter([1.0], [1, -2 * 0.8 * np.cos(2 * np.pi * 0.3), 0.8**2], contact)
+    return u[:, None], y[:, None] + above_cutoff(ring[:, None], CUTOFF, 1.0)
+
+
+def test_hinges_past_a_clearance_recover_impacts_the_force_does_not_show():
+    rng = np.random.default_rng(7)
+    (u, y), (u_new, y_new) = _contacts(rng), _contacts(rng)
+    bands = (0.0, CUTOFF, 0.51)
+    gated = AboveBandRegressor(BLAEstimator(2, fs=1.0), cutoff=CUTOFF, n_taps=16).fit(u, y)
+    hinged = AboveBandRegressor(BLAEstimator(2, fs=1.0), cutoff=CUTOFF, n_taps=16, clearances=(0.5, 1.0, 1.5),
+                                n_integrations=0).fit(u, y)
+    before = nrmse_by_band(y_new, gated.predict(u_new), fs=1.0, edges=bands)
+    after = nrmse_by_band(y_new, hinged.predict(u_new), fs=1.0, edges=bands)
+    assert gated.explained_fraction_[0] < 0.05  # 0.006: the force does not show the impacts
+    assert hinged.explained_fraction_[0] > 0.95  # 0.996
+    assert after[1, 0] < 0.1 * before[1, 0]  # above the band: 0.0685 -> 0.0032
+    assert after[0, 0] == pytest.approx(before[0, 0], rel=0.02)  # in the band: the model's own
+    assert hinged.motion_scale_.shape == (1,)
+    assert hinged.fir_.shape == (1 + 2 * 3, 16, 1)  # the gated force, then two hinges per clearance
+    assert hinged.n_map_params_ == gated.gate_coef_.size + 7 * 16
+
+
 def test_bad_settings_are_refused_with_the_fix():
     u, y = _rattle(np.random.default_rng(4), n=1024)
     with pytest.raises(ValueError, match="cutoff: pass the highest frequency"):
@@ -160,6 +206,10 @@ def test_bad_settings_are_refused_with_the_fix():
         AboveBandRegressor(IntegratedOutputRegressor(BLAEstimator(2, fs=1.0)), cutoff=CUTOFF).fit(u, y)
     with pytest.raises(ValueError, match="requires y"):
         AboveBandRegressor(BLAEstimator(2, fs=1.0), cutoff=CUTOFF).fit(u, None)
+    with pytest.raises(ValueError, match="clearances: the hinges are inputs of the FIR filters"):
+        AboveBandRegressor(BLAEstimator(2, fs=1.0), cutoff=CUTOFF, clearances=(1.0,), hidden_units=4).fit(u, y)
+    with pytest.raises(ValueError, match="clearances=.*non-negative numbers"):
+        AboveBandRegressor(BLAEstimator(2, fs=1.0), cutoff=CUTOFF, clearances=(-1.0,)).fit(u, y)
     assert isinstance(AboveBandRegressor().get_params()["regressor"], (BaseEstimator, type(None)))
 
 

@@ -10,7 +10,7 @@ error. Internal: may change without notice.
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
-__all__ = ["above_cutoff", "apply_fir", "envelope", "fit_fir", "fit_gate", "gate", "lagged"]
+__all__ = ["above_cutoff", "apply_fir", "envelope", "fit_fir", "fit_gate", "gate", "hinges", "integral_in_band", "lagged"]
 
 # Rows of a design matrix held at once (8192 x 200 taps: 13 MB).
 ROWS_PER_BLOCK = 8192
@@ -23,6 +23,35 @@ def above_cutoff(signal, cutoff, fs):
     spectrum = np.fft.rfft(signal, axis=0)
     spectrum[np.fft.rfftfreq(signal.shape[0], 1.0 / fs) <= cutoff] = 0.0
     return np.fft.irfft(spectrum, signal.shape[0], axis=0)
+
+
+def integral_in_band(signal, low, high, fs, n_integrations):
+    """Each channel's content in ``(low, high]``, integrated ``n_integrations``
+    times in time (zero phase: divided by ``(2 pi i f)**n`` on the DFT of
+    the whole record). The lines at and below ``low`` are dropped, as
+    integration would magnify their drift."""
+    spectrum = np.fft.rfft(signal, axis=0)
+    f = np.fft.rfftfreq(signal.shape[0], 1.0 / fs)
+    keep = (f > low) & (f <= high)
+    spectrum[~keep] = 0.0
+    spectrum[keep] /= (2j * np.pi * f[keep, None]) ** n_integrations
+    return np.fft.irfft(spectrum, signal.shape[0], axis=0)
+
+
+def relative_motions(motion):
+    """Each channel of an (n_samples, n) motion and each difference of two
+    (``i`` minus ``j``, ``i > j``): where a joint lies between two sensors,
+    its motion is their difference."""
+    i, j = np.tril_indices(motion.shape[1], -1)
+    return np.hstack([motion, motion[:, i] - motion[:, j]])
+
+
+def hinges(motion, scale, clearances):
+    """``max(m - c, 0)`` and ``min(m + c, 0)`` of each channel ``m`` of
+    ``motion / scale``, for each clearance ``c``: a contact that opens
+    beyond a clearance, in each direction."""
+    m = motion / scale
+    return np.hstack([h for c in clearances for h in (np.maximum(m - c, 0.0), np.minimum(m + c, 0.0))])
 
 
 def lagged(w, n_taps, periodic):

@@ -32,6 +32,12 @@ model's in-band prediction and the gated force takes the FIR's place. With
 ``in_band`` it reads the input in the band as well and models the model's
 whole error: what the state-space model leaves in the band, a map of its
 own simulation and the input corrects.
+
+Where the force does not show the impacts (the shaker far from the joint),
+the simulated motion does: with ``clearances``, the hinges of the model's
+in-band velocities past a clearance, kept above the cutoff, are more
+inputs of the FIR filters. Each kink rings the modes above the band, at
+the time the motion opens the contact.
 """
 from numbers import Integral, Real
 from typing import NamedTuple
@@ -43,7 +49,8 @@ from sklearn.utils.validation import check_is_fitted
 from ..utils.parameters import Interval, validates_parameters
 from ..utils.validation import restore_layout, signal_layout, validate_signals
 from ._base import DynamicRegressorMixin
-from ._gated import above_cutoff, apply_fir, envelope, fit_fir, fit_gate, gate
+from ._gated import (above_cutoff, apply_fir, envelope, fit_fir, fit_gate, gate, hinges, integral_in_band,
+                     relative_motions)
 from ._window_network import apply_networks, fit_networks, held_out_rows, windows
 from .bla import BLAEstimator
 
@@ -125,6 +132,25 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         Ridge penalty of the FIR fit, relative to the mean diagonal of its
         normal matrix; with ``hidden_units``, the network's L2 penalty on its
         weights (in units of its standardised inputs and outputs).
+    clearances : tuple of float or None, default=None
+        With the FIR filters: the contacts that open past a clearance, as
+        more inputs of the filters beside the gated input. The outputs'
+        content in the band, as the regressor simulates it, is integrated
+        ``n_integrations`` times (velocities for accelerometers), and each
+        output and each difference of two (a joint between two sensors moves
+        by their difference) gives ``max(m - c, 0)`` and ``min(m + c, 0)``
+        for each clearance ``c``, in units of that motion's largest rms over
+        the training signals. The kinks ring the modes above the band as an
+        impact does, at the time the simulated motion says. Train on more
+        than one waveform (multisines and sine sweeps): the filters then
+        learn the contacts, not one record's timing. ``n_outputs * (n_outputs
+        + 1)`` channels per clearance, each ``n_taps`` coefficients per
+        output.
+    n_integrations : int, default=1
+        With ``clearances``: how many times the outputs are integrated in
+        time before the hinges (1: the velocities of accelerometers; 0: the
+        outputs themselves). Content below a sixteenth of ``cutoff`` is
+        dropped first, as integrating magnifies it.
     hidden_units : int or None, default=None
         None: the FIR filters above, linear in the gated input. An int: a
         network with that many rectified units in one hidden layer takes
@@ -175,7 +201,16 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         :func:`numpy.triu_indices` orders them) of the scaled states.
     fir_ : ndarray of shape (n_inputs, n_taps, n_outputs)
         ``fir_[i, j, k]``: from the gated input ``i`` delayed ``j - n_lead``
-        samples to output ``k``. Only without ``hidden_units``.
+        samples to output ``k``; with ``clearances``, the inputs after the
+        gated ones are the hinges. Only without ``hidden_units``.
+    motion_scale_ : ndarray of shape (n_outputs * (n_outputs + 1) // 2,)
+        The largest rms over the training signals of each output's motion
+        and each difference of two (the clearances' unit). Only with
+        ``clearances``.
+    hinge_scale_ : float
+        The hinges' common scale in the filters' inputs (their rms over the
+        training signals over the gated input's), so that the ridge penalty
+        weighs both alike. Only with ``clearances``.
     networks_ : list of sklearn.neural_network.MLPRegressor
         The fitted networks, in units of their standardised inputs and
         outputs. Only with ``hidden_units``.
@@ -240,6 +275,8 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         "n_taps": [Interval(Integral, 1, None, closed="left")],
         "n_lead": [Interval(Integral, 0, None, closed="left")],
         "alpha": [Interval(Real, 0, None, closed="left")],
+        "clearances": ["array-like", None],
+        "n_integrations": [Interval(Integral, 0, None, closed="left")],
         "hidden_units": [Interval(Integral, 1, None, closed="left"), None],
         "in_band": ["boolean"],
         "window_stride": [Interval(Integral, 1, None, closed="left")],
@@ -249,13 +286,15 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
     }
 
     def __init__(self, regressor=None, *, cutoff=None, fs=1.0, n_taps=200, n_lead=0, alpha=1e-4,
-                 hidden_units=None, in_band=False, window_stride=2, n_networks=1, n_jobs=None, random_state=None):
+                 clearances=None, n_integrations=1, hidden_units=None, in_band=False, window_stride=2, n_networks=1, n_jobs=None, random_state=None):
         self.regressor = regressor
         self.cutoff = cutoff
         self.fs = fs
         self.n_taps = n_taps
         self.n_lead = n_lead
         self.alpha = alpha
+        self.clearances = clearances
+        self.n_integrations = n_integrations
         self.hidden_units = hidden_units
         self.in_band = in_band
         self.window_stride = window_stride
@@ -293,6 +332,15 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         if self.in_band and self.hidden_units is None:
             raise ValueError("in_band=True needs a network: pass hidden_units (e.g. 128), or in_band=False for "
                              "the FIR filters above the band.")
+        if self.clearances is not None:
+            clearances = np.asarray(self.clearances, dtype=float)
+            if self.hidden_units is not None:
+                raise ValueError("clearances: the hinges are inputs of the FIR filters; the network reads the "
+                                 "prediction's window itself. Pass clearances=None with hidden_units.")
+            if clearances.ndim != 1 or clearances.size == 0 or not np.all(np.isfinite(clearances)) \
+                    or np.any(clearances < 0):
+                raise ValueError(f"clearances={self.clearances!r}: pass a tuple of non-negative numbers (in units "
+                                 "of each motion's largest training rms), e.g. (0.5, 1.0, 1.5), or None.")
         X_list, y_list, _ = validate_signals(self, X, y, reset=True)
         self.regressor_ = clone(self.regressor) if self.regressor is not None else BLAEstimator()
         self.regressor_.fit(X, y, **fit_params)
@@ -308,6 +356,15 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         envelopes = [envelope(r, self.above_band_rms_, window, s.periodic) for s, r in zip(signals, residual)]
         self.gate_coef_ = fit_gate([s.states for s in signals], envelopes, self._features)
         before_power = np.maximum(self.above_band_rms_ ** 2, np.finfo(float).tiny)
+        if self.clearances is not None:
+            motions = [self._motions(s) for s in signals]
+            self.motion_scale_ = np.max([np.sqrt(np.mean(m**2, axis=0)) for m in motions], axis=0)
+            self.motion_scale_[self.motion_scale_ == 0] = 1.0
+            self.hinge_scale_ = 1.0
+            gated_rms = np.sqrt(np.mean(np.vstack([self._gated(s) for s in signals]) ** 2))
+            hinge_rms = np.sqrt(np.mean(np.vstack([self._hinges(m) for m in motions]) ** 2))
+            if gated_rms > 0 and hinge_rms > 0:
+                self.hinge_scale_ = gated_rms / hinge_rms
         inputs = [self._map_input(s) for s in signals]
         if self.hidden_units is None:
             self.fir_ = fit_fir(inputs, residual, [s.periodic for s in signals], self.n_taps, self.alpha)
@@ -342,12 +399,27 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         """The gate's features: the scaled states' quadratic form."""
         return quadratic_features(x / self.state_scale_)
 
+    def _motions(self, signal):
+        """The outputs' simulated motion in the band and each difference of
+        two (``clearances``' variables)."""
+        motion = integral_in_band(signal.prediction, self.cutoff / 16, self.cutoff, self.fs, self.n_integrations)
+        return relative_motions(motion)
+
+    def _hinges(self, motions):
+        """The hinges of the motions past each clearance, kept above
+        ``cutoff`` (their content in the band is the regressor's), in the
+        filters' units."""
+        kinks = hinges(motions, self.motion_scale_, np.asarray(self.clearances, dtype=float))
+        return self.hinge_scale_ * above_cutoff(kinks, self.cutoff, self.fs)
+
     def _gated(self, signal):
-        """The input above ``cutoff``, gated by the states (and kept above
-        it), ``n_lead`` samples ahead: circularly on a periodic signal, with
-        nothing after the end of another."""
+        """The input above ``cutoff``, gated by the states (and kept above it)."""
         g = gate(signal.states, self.gate_coef_, self._features)
-        w = above_cutoff(g[:, None] * signal.input_above, self.cutoff, self.fs)
+        return above_cutoff(g[:, None] * signal.input_above, self.cutoff, self.fs)
+
+    def _ahead(self, w, signal):
+        """``w`` read ``n_lead`` samples ahead: circularly on a periodic
+        signal, with nothing after the end of another."""
         if self.n_lead == 0:
             return w
         if signal.periodic:
@@ -355,13 +427,17 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         return np.vstack([w[self.n_lead :], np.zeros((min(self.n_lead, w.shape[0]), w.shape[1]))])
 
     def _map_input(self, signal):
-        """What the map above ``cutoff`` reads along one signal: the gated
-        input for the FIR filters; for the network, its windows of the
-        prediction below ``cutoff`` beside the gated input."""
+        """What the map above ``cutoff`` reads along one signal: for the FIR
+        filters the gated input, and the hinges with ``clearances``; for the
+        network, its windows of the prediction below ``cutoff`` beside the
+        gated input. ``n_lead`` samples ahead."""
+        gated = self._ahead(self._gated(signal), signal)
         if self.hidden_units is None:
-            return self._gated(signal)
+            if self.clearances is None:
+                return gated
+            return np.hstack([gated, self._ahead(self._hinges(self._motions(signal)), signal)])
         below = signal.prediction - above_cutoff(signal.prediction, self.cutoff, self.fs)
-        channels = [below, self._gated(signal)] + ([signal.input_below] if self.in_band else [])
+        channels = [below, gated] + ([signal.input_below] if self.in_band else [])
         return windows(np.hstack(channels), self.n_taps, self.window_stride, signal.periodic)
 
     def _apply_map(self, map_input, periodic):
