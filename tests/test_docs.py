@@ -435,6 +435,13 @@ def _averaged(stable_at_rest, kind="averages"):
     return next(run[kind] for run in _results("f16_averaged")["runs"] if run["stable_at_rest"] == stable_at_rest)
 
 
+def _clearances(seed, route):
+    """f16_clearances.py: one draw's row of a route above the band (None:
+    the model alone)."""
+    rows = next(d["rows"] for d in _results("f16_clearances")["draws"] if d["random_state"] == seed)
+    return next(r for r in rows if r["model"].get("route") == route)
+
+
 def _one_figure(values, decimals):
     """``values`` if they all round to one figure at ``decimals`` places
     (a claim about several rows), else NaN (no quote matches it)."""
@@ -693,6 +700,9 @@ OUTPUT_BRANCHES = ("bench_f16.py --decoupled 3:5:18 3:5:18@1 3:5:18@2 --branch-b
 LEVEL_MODES_MODEL = "f16_level_modes.py --model: f16_level_modes.json"
 BUDGET = "f16_error_budget.py --also-stable-at-rest: f16_error_budget.json"
 AVERAGED = "f16_averaged.py: f16_averaged.json"
+CLEARANCES = "f16_clearances.py: f16_clearances.json"
+GATED_FILTERS, GATED_SWEEPS, HINGES = ("gated filters", "gated filters, with the sweeps",
+                                       "gated filters and hinges, with the sweeps")
 NOISE_TEST = "tests/test_pnlss_fitting.py::test_noise_weighting_weighs_each_level_by_its_own_noise"
 STEPS = "bench_step_basis.py: step_basis.json"
 BOUNDED = "bench_bounded.py: bounded.json"
@@ -1535,6 +1545,22 @@ FIGURES = [
                     _averaged(False)[0]["mean_nrmse_sweeps"], _averaged(False)[1]["mean_nrmse_sweeps"],
                     _averaged(False, "members")[4]["mean_nrmse_sweeps"], _averaged(False)[4]["mean_nrmse_sweeps"],
                     _averaged(True)[4]["mean_nrmse_sweeps"]]),
+    Figure(R, "`AboveBandRegressor(clearances=(0.5, 1.0, 1.5))`", CLEARANCES,
+           lambda: _results("f16_clearances")["clearances"]),
+    Figure(R, "with ridge `alpha=1e-2`", CLEARANCES, lambda: [_results("f16_clearances")["hinge_alpha"]]),
+    Figure(R, "they take the test levels' sweeps to 0.220 / 0.240 / 0.238, against 0.236 / 0.254 / 0.250 with the "
+              "gated filters fitted on the multisines alone and 0.225 / 0.244 / 0.240 with them fitted on both "
+              "waveforms. On the test multisines they give 0.155 / 0.153 / 0.161, against 0.151 / 0.151 / 0.160 and "
+              "0.156 / 0.156 / 0.163", CLEARANCES,
+           lambda: [_clearances(seed, route)[key] for key in ("mean_nrmse_sweeps", "mean_nrmse")
+                    for route in (HINGES, GATED_FILTERS, GATED_SWEEPS) for seed in (0, 1, 2)]),
+    Figure(R, "level 6 gains at the drive point and on the wing (0.123 / 0.111 / 0.298 on the first draw, against "
+              "0.133 / 0.119 / 0.297), level 2's payload loses (0.127 against 0.114)", CLEARANCES,
+           lambda: [6, *_clearances(0, HINGES)["nrmse"]["6"], *_clearances(0, GATED_FILTERS)["nrmse"]["6"], 2,
+                    _clearances(0, HINGES)["nrmse"]["2"][2], _clearances(0, GATED_FILTERS)["nrmse"]["2"][2]]),
+    Figure(R, "They cost 22372 coefficients and 261 s of fitting on the first draw", CLEARANCES,
+           lambda: [_clearances(0, HINGES)["n_above_band_params"], _clearances(0, HINGES)["map_fit_s"]]),
+    Figure(R, "six layers of 100 states", "Forgione et al., CDC 2024, the case study", lambda: [None]),
     Figure(R, "It has 51 nonlinear parameters where the full model in the states and input has 90 "
               "(the states-only model above: 48)", "the models' structure",
            lambda: [_n_decoupled(3, 10), _n_nonlinear("states_inputs", (2, 3)), _n_nonlinear("states", (2, 3))]),
