@@ -1,5 +1,6 @@
 """A signal's content above a cutoff, switched on by a gate, through FIR
-filters: the pieces of :class:`~sklearn_pnlss.AboveBandRegressor`.
+filters, and the hinges of a motion past its clearances: the pieces of
+:class:`~sklearn_pnlss.AboveBandRegressor`.
 
 The response is ``sum_j h_j g(t - j) u_above(t - j)``: ``u_above`` the input's
 content above the cutoff, ``g = max(F c, 0)`` a gate whose features ``F``
@@ -10,7 +11,8 @@ error. Internal: may change without notice.
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
-__all__ = ["above_cutoff", "apply_fir", "envelope", "fit_fir", "fit_gate", "gate", "hinges", "integral_in_band", "lagged"]
+__all__ = ["above_cutoff", "apply_fir", "envelope", "fit_fir", "fit_gate", "gate", "hinges", "integral_in_band",
+           "lagged", "relative_motions"]
 
 # Rows of a design matrix held at once (8192 x 200 taps: 13 MB).
 ROWS_PER_BLOCK = 8192

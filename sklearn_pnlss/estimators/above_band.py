@@ -286,7 +286,8 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
     }
 
     def __init__(self, regressor=None, *, cutoff=None, fs=1.0, n_taps=200, n_lead=0, alpha=1e-4,
-                 clearances=None, n_integrations=1, hidden_units=None, in_band=False, window_stride=2, n_networks=1, n_jobs=None, random_state=None):
+                 clearances=None, n_integrations=1, hidden_units=None, in_band=False, window_stride=2, n_networks=1,
+                 n_jobs=None, random_state=None):
         self.regressor = regressor
         self.cutoff = cutoff
         self.fs = fs
