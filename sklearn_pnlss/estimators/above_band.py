@@ -35,8 +35,8 @@ own simulation and the input corrects.
 
 Where the force does not show the impacts (the shaker far from the joint),
 the simulated motion does: with ``clearances``, the hinges of the model's
-in-band velocities past a clearance, kept above the cutoff, are more
-inputs of the FIR filters. Each kink rings the modes above the band, at
+in-band velocities past a clearance, gated like the input and kept above
+the cutoff, are more inputs of the FIR filters. Each kink rings the modes above the band, at
 the time the motion opens the contact.
 """
 from numbers import Integral, Real
@@ -140,7 +140,9 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         output and each difference of two (a joint between two sensors moves
         by their difference) gives ``max(m - c, 0)`` and ``min(m + c, 0)``
         for each clearance ``c``, in units of that motion's largest rms over
-        the training signals. The kinks ring the modes above the band as an
+        the training signals, switched on by the same gate as the input (the
+        motion says when a contact opens, the gate whether the joint knocks
+        at that amplitude). The kinks ring the modes above the band as an
         impact does, at the time the simulated motion says. Train on more
         than one waveform (multisines and sine sweeps): the filters then
         learn the contacts, not one record's timing. ``n_outputs * (n_outputs
@@ -363,7 +365,7 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
             self.motion_scale_[self.motion_scale_ == 0] = 1.0
             self.hinge_scale_ = 1.0
             gated_rms = np.sqrt(np.mean(np.vstack([self._gated(s) for s in signals]) ** 2))
-            hinge_rms = np.sqrt(np.mean(np.vstack([self._hinges(m) for m in motions]) ** 2))
+            hinge_rms = np.sqrt(np.mean(np.vstack([self._gated_hinges(s) for s in signals]) ** 2))
             if gated_rms > 0 and hinge_rms > 0:
                 self.hinge_scale_ = gated_rms / hinge_rms
         inputs = [self._map_input(s) for s in signals]
@@ -406,17 +408,22 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         motion = integral_in_band(signal.prediction, self.cutoff / 16, self.cutoff, self.fs, self.n_integrations)
         return relative_motions(motion)
 
-    def _hinges(self, motions):
-        """The hinges of the motions past each clearance, kept above
+    def _gated_hinges(self, signal):
+        """The hinges of the motions past each clearance, gated by the
+        states as the input is (the motion says when a contact opens, the
+        gate whether the joint knocks at that amplitude), kept above
         ``cutoff`` (their content in the band is the regressor's), in the
         filters' units."""
-        kinks = hinges(motions, self.motion_scale_, np.asarray(self.clearances, dtype=float))
-        return self.hinge_scale_ * above_cutoff(kinks, self.cutoff, self.fs)
+        kinks = hinges(self._motions(signal), self.motion_scale_, np.asarray(self.clearances, dtype=float))
+        return self.hinge_scale_ * above_cutoff(self._gate(signal)[:, None] * kinks, self.cutoff, self.fs)
+
+    def _gate(self, signal):
+        """The gate along one signal, from its states."""
+        return gate(signal.states, self.gate_coef_, self._features)
 
     def _gated(self, signal):
         """The input above ``cutoff``, gated by the states (and kept above it)."""
-        g = gate(signal.states, self.gate_coef_, self._features)
-        return above_cutoff(g[:, None] * signal.input_above, self.cutoff, self.fs)
+        return above_cutoff(self._gate(signal)[:, None] * signal.input_above, self.cutoff, self.fs)
 
     def _ahead(self, w, signal):
         """``w`` read ``n_lead`` samples ahead: circularly on a periodic
@@ -436,7 +443,7 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         if self.hidden_units is None:
             if self.clearances is None:
                 return gated
-            return np.hstack([gated, self._ahead(self._hinges(self._motions(signal)), signal)])
+            return np.hstack([gated, self._ahead(self._gated_hinges(signal), signal)])
         below = signal.prediction - above_cutoff(signal.prediction, self.cutoff, self.fs)
         channels = [below, gated] + ([signal.input_below] if self.in_band else [])
         return windows(np.hstack(channels), self.n_taps, self.window_stride, signal.periodic)
