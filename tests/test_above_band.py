@@ -9,7 +9,8 @@ from sklearn.base import BaseEstimator
 from sklearn.frozen import FrozenEstimator
 
 from sklearn_pnlss import AboveBandRegressor, BLAEstimator, IntegratedOutputRegressor
-from sklearn_pnlss.estimators._gated import above_cutoff, hinges, integral_in_band, lagged, relative_motions
+from sklearn_pnlss.estimators._gated import (above_cutoff, apply_fir, fit_fir, hinges, integral_in_band, lagged,
+                                              relative_motions)
 from sklearn_pnlss.metrics import nrmse_by_band
 
 CUTOFF = 0.1  # cycles per sample
@@ -32,6 +33,20 @@ def test_lagged_holds_each_channel_delayed_circularly_or_from_rest():
         for j in range(3):
             np.testing.assert_array_equal(periodic[:, i, j], np.roll(w[:, i], j))
             np.testing.assert_array_equal(from_rest[:, i, j], np.r_[np.zeros(j), w[:5 - j, i]])
+
+
+@pytest.mark.parametrize("periodic", [True, False])
+def test_the_filters_from_the_spectra_are_the_ridge_solution_of_the_delay_design(periodic):
+    # the normal equations come from the channels' correlations, never the design matrix: they must be its own
+    rng = np.random.default_rng(3)
+    w, r = rng.standard_normal((301, 3)), rng.standard_normal((301, 2))
+    design = lagged(w, 7, periodic).reshape(301, -1)
+    normal = design.T @ design
+    ridge = 1e-3 * np.trace(normal) / normal.shape[0]
+    expected = np.linalg.solve(normal + ridge * np.eye(21), design.T @ r)
+    fir = fit_fir([w], [r], [periodic], 7, 1e-3)
+    np.testing.assert_allclose(fir.reshape(21, 2), expected, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(apply_fir(w, fir, periodic), design @ expected, atol=1e-12)
 
 
 def test_motions_are_integrated_in_the_band_differenced_and_hinged():
