@@ -36,17 +36,20 @@ def test_lagged_holds_each_channel_delayed_circularly_or_from_rest():
 
 
 @pytest.mark.parametrize("periodic", [True, False])
-def test_the_filters_from_the_spectra_are_the_ridge_solution_of_the_delay_design(periodic):
-    # the normal equations come from the channels' correlations, never the design matrix: they must be its own
+@pytest.mark.parametrize("n_channels", [1, 3])
+def test_the_filters_from_the_spectra_are_the_ridge_solution_of_the_delay_design(periodic, n_channels):
+    # the normal equations come from the channels' correlations, never the design matrix: they must be its own,
+    # summed over signals of other lengths
     rng = np.random.default_rng(3)
-    w, r = rng.standard_normal((301, 3)), rng.standard_normal((301, 2))
-    design = lagged(w, 7, periodic).reshape(301, -1)
-    normal = design.T @ design
+    ws = [rng.standard_normal((n, n_channels)) for n in (301, 123)]
+    rs = [rng.standard_normal((n, 2)) for n in (301, 123)]
+    designs = [lagged(w, 7, periodic).reshape(w.shape[0], -1) for w in ws]
+    normal = sum(d.T @ d for d in designs)
     ridge = 1e-3 * np.trace(normal) / normal.shape[0]
-    expected = np.linalg.solve(normal + ridge * np.eye(21), design.T @ r)
-    fir = fit_fir([w], [r], [periodic], 7, 1e-3)
-    np.testing.assert_allclose(fir.reshape(21, 2), expected, rtol=1e-9, atol=1e-12)
-    np.testing.assert_allclose(apply_fir(w, fir, periodic), design @ expected, atol=1e-12)
+    expected = np.linalg.solve(normal + ridge * np.eye(7 * n_channels), sum(d.T @ r for d, r in zip(designs, rs)))
+    fir = fit_fir(ws, rs, [periodic] * 2, 7, 1e-3)
+    np.testing.assert_allclose(fir.reshape(-1, 2), expected, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(apply_fir(ws[0], fir, periodic), designs[0] @ expected, atol=1e-12)
 
 
 def test_motions_are_integrated_in_the_band_differenced_and_hinged():

@@ -103,9 +103,16 @@ def fit_gate(variables, envelopes, features):
     return np.linalg.lstsq(normal, rhs, rcond=None)[0]
 
 
-def gate(v, coef, features):
-    """The gate ``max(features(v) @ coef, 0)`` along one signal."""
-    return np.maximum(features(v) @ coef, 0.0)
+def gate(x, coef):
+    """The gate ``max(q(x), 0)`` along one signal ``x`` (n_samples, n), ``q``
+    the quadratic form whose coefficients ``coef`` multiply ``[1, x_i x_j
+    (i <= j)]`` (:func:`numpy.triu_indices`' order), evaluated as ``x^T Q
+    x``: ``n^2`` flops a sample where the features take ``n^2 / 2`` numbers
+    of memory each."""
+    n = x.shape[1]
+    form = np.zeros((n, n))
+    form[np.triu_indices(n)] = coef[1:]
+    return np.maximum(coef[0] + np.einsum("ti,ti->t", x @ form, x), 0.0)
 
 
 def _spectra(w, n_taps, periodic):
@@ -117,53 +124,65 @@ def _spectra(w, n_taps, periodic):
     return sfft.rfft(w, n, axis=0), n
 
 
-def _add_delay_gram(normal, rhs, w, r, n_taps, periodic):
-    """Add ``A^T A`` and ``A^T r`` to ``normal`` and ``rhs``, ``A`` the delay
-    design of ``w`` (``lagged`` reshaped), without forming ``A``: its
-    ``(i, a), (j, b)`` entry is ``sum_t w_i(t - a) w_j(t - b)``, the
-    correlation of channels ``i`` and ``j`` at ``a - b``, from the spectra
-    in ``O(n_channels^2 n log n)`` rather than ``O(n (n_channels
-    n_taps)^2)`` (for the F-16's hinges, 37 channels of 200 taps, a
-    thousandth of the flops)."""
+def _correlations(w, r, n_taps, periodic):
+    """What the delay design ``A`` of one signal ``w`` (``lagged``
+    reshaped) and its error ``r`` give the normal equations, from the
+    spectra rather than ``A``: ``corr[i, j, d + n_taps - 1] = sum_s w_i(s)
+    w_j(s + d)`` for ``|d| < n_taps`` (``A^T A``'s block ``i, j`` is
+    ``corr[i, j]`` at ``a - b``), ``cross[i, a, k] = sum_t w_i(t - a)
+    r_k(t)`` (``A^T r``), and from rest the rows ``P`` with ``P^T P`` the
+    products past the record's end that the correlations hold and ``A``
+    does not (None for a periodic signal)."""
     m = w.shape[1]
     W, n = _spectra(w, n_taps, periodic)
-    lags = np.r_[0:n_taps, n - (n_taps - 1):n]  # delays 0 .. n_taps - 1, then -(n_taps - 1) .. -1
-    diff = np.subtract.outer(np.arange(n_taps), np.arange(n_taps))  # a - b
-    at = np.where(diff >= 0, diff, lags.size + diff)
-    for i in range(m):
-        corr = sfft.irfft(np.conj(W[:, i:i + 1]) * W, n, axis=0)[lags]  # sum_s w_i(s) w_j(s + d)
-        rows = slice(i * n_taps, (i + 1) * n_taps)
-        for j in range(m):
-            normal[rows, j * n_taps:(j + 1) * n_taps] += corr[at, j]
+    lags = np.r_[n - (n_taps - 1):n, 0:n_taps]  # delays -(n_taps - 1) .. n_taps - 1
+    corr = np.empty((m, m, lags.size))
+    for i in range(m):  # c_ji(d) = c_ij(-d): the pairs j >= i only
+        corr[i, i:] = sfft.irfft(np.conj(W[:, i:i + 1]) * W[:, i:], n, axis=0, workers=-1)[lags].T
+        corr[i:, i] = corr[i, i:, ::-1]
+    cross = sfft.irfft(np.conj(W)[:, :, None] * sfft.rfft(r, n, axis=0)[:, None, :], n, axis=0, workers=-1)
+    past_end = None
     if not periodic:
-        # the record ends: the sum over t stops at its last sample for every delay, which the linear
-        # correlation (summed over every overlap) does not; the difference is the gram of the record's
-        # last n_taps - 1 samples read backwards, delayed a by a
+        # the sum over t stops at the record's last sample for every delay; the linear correlation sums
+        # every overlap: the difference is the gram of the last n_taps - 1 samples read backwards, delayed
         tail = w[::-1][:n_taps - 1]
         back = np.arange(n_taps)[None, :] - np.arange(1, n_taps)[:, None]
         past_end = np.where(back[:, None, :] >= 0, tail[np.maximum(back, 0)].transpose(0, 2, 1), 0.0)
         past_end = past_end.reshape(n_taps - 1, m * n_taps)
-        normal -= past_end.T @ past_end
-    R = sfft.rfft(r, n, axis=0)
-    cross = sfft.irfft(np.conj(W)[:, :, None] * R[:, None, :], n, axis=0)[:n_taps]  # (delay, channel, output)
-    rhs += cross.transpose(1, 0, 2).reshape(m * n_taps, -1)
+    return corr, cross[:n_taps].transpose(1, 0, 2), past_end
 
 
 def fit_fir(gated, errors, periodic, n_taps, alpha):
     """FIR filters (n_inputs, n_taps, n_outputs) by ridge regression of each
     signal's error on its gated input and the input's delays; ``alpha``
-    relative to the normal matrix's mean diagonal."""
-    size = gated[0].shape[1] * n_taps
-    normal, rhs = np.zeros((size, size)), np.zeros((size, errors[0].shape[1]))
+    relative to the normal matrix's mean diagonal.
+
+    The normal matrix is built from the channels' correlations in
+    ``O(n_channels^2 n log n)``, never from the design matrix's ``O(n
+    (n_channels n_taps)^2)`` (for the F-16's hinges, 37 channels of 200
+    taps, a thousandth of the flops): summed over the signals, laid out
+    block-Toeplitz once, less the products past each record's end."""
+    m, k = gated[0].shape[1], errors[0].shape[1]
+    corr, rhs, past_end = 0.0, 0.0, []
     for w, r, p in zip(gated, errors, periodic):
-        _add_delay_gram(normal, rhs, w, r, n_taps, p)
-    scale = np.trace(normal) / size
+        c, x, tail = _correlations(w, r, n_taps, p)
+        corr, rhs = corr + c, rhs + x
+        past_end += [] if tail is None else [tail]
+    # block (i, j) at (a, b) is corr[i, j] at a - b: the windows of the delays read backwards
+    windows = sliding_window_view(corr[:, :, ::-1], n_taps, axis=2)[:, :, ::-1]  # (i, j, a, b)
+    normal = np.empty((m * n_taps, m * n_taps))
+    normal.reshape(m, n_taps, m, n_taps)[...] = windows.transpose(0, 2, 1, 3)
+    if past_end:
+        past_end = np.vstack(past_end)
+        normal -= past_end.T @ past_end
+    rhs = rhs.reshape(m * n_taps, k)
+    scale = np.trace(normal) / normal.shape[0]
     if scale <= 0:  # nothing gated through: nothing to fit
         coef = np.zeros_like(rhs)
     else:
-        normal[np.diag_indices(size)] += alpha * scale
+        normal[np.diag_indices(normal.shape[0])] += alpha * scale
         coef = linalg.solve(normal, rhs, assume_a="pos", overwrite_a=True, check_finite=False)
-    return coef.reshape(-1, n_taps, errors[0].shape[1])
+    return coef.reshape(m, n_taps, k)
 
 
 def apply_fir(w, fir, periodic):

@@ -419,7 +419,7 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
 
     def _gate(self, signal):
         """The gate along one signal, from its states."""
-        return gate(signal.states, self.gate_coef_, self._features)
+        return gate(signal.states / self.state_scale_, self.gate_coef_)
 
     def _gated(self, signal):
         """The input above ``cutoff``, gated by the states (and kept above it)."""
