@@ -442,6 +442,13 @@ def _clearances(seed, route):
     return next(r for r in rows if r["model"].get("route") == route)
 
 
+def _clearances_mean(k, route):
+    """f16_clearances.py: the row of the mean of the first ``k`` draws'
+    models of a route above the band."""
+    return next(r for r in _results("f16_clearances")["averages"]
+                if r["model"]["route"] == route and len(r["model"]["draws"]) == k)
+
+
 def _one_figure(values, decimals):
     """``values`` if they all round to one figure at ``decimals`` places
     (a claim about several rows), else NaN (no quote matches it)."""
@@ -1547,19 +1554,32 @@ FIGURES = [
                     _averaged(True)[4]["mean_nrmse_sweeps"]]),
     Figure(R, "`AboveBandRegressor(clearances=(0.5, 1.0, 1.5))`", CLEARANCES,
            lambda: _results("f16_clearances")["clearances"]),
-    Figure(R, "with ridge `alpha=1e-2`", CLEARANCES, lambda: [_results("f16_clearances")["hinge_alpha"]]),
-    Figure(R, "they take the test levels' sweeps to 0.220 / 0.240 / 0.238, against 0.236 / 0.254 / 0.250 with the "
-              "gated filters fitted on the multisines alone and 0.225 / 0.244 / 0.240 with them fitted on both "
-              "waveforms. On the test multisines they give 0.155 / 0.153 / 0.161, against 0.151 / 0.151 / 0.160 and "
-              "0.156 / 0.156 / 0.163", CLEARANCES,
-           lambda: [_clearances(seed, route)[key] for key in ("mean_nrmse_sweeps", "mean_nrmse")
+    Figure(R, "with the ridge chosen on held-out estimation levels 3 and 5 among 1e-3, 1e-2 and 1e-1 (`alpha=0.1` "
+              "on every draw", CLEARANCES,
+           lambda: [*_results("f16_clearances")["held_out_levels"], *_results("f16_clearances")["hinge_alphas"],
+                    _one_figure([_clearances(seed, HINGES)["model"]["alpha"] for seed in (0, 1, 2)], 3)]),
+    Figure(R, "they take the test multisines to 0.149 / 0.148 / 0.156, against 0.151 / 0.151 / 0.160 with the gated "
+              "filters fitted on the multisines alone and 0.156 / 0.156 / 0.163 with them fitted on both waveforms, "
+              "and the test levels' sweeps to 0.218 / 0.239 / 0.235, against 0.236 / 0.254 / 0.250 and 0.225 / 0.244 "
+              "/ 0.240", CLEARANCES,
+           lambda: [_clearances(seed, route)[key] for key in ("mean_nrmse", "mean_nrmse_sweeps")
                     for route in (HINGES, GATED_FILTERS, GATED_SWEEPS) for seed in (0, 1, 2)]),
-    Figure(R, "level 6 gains at the drive point and on the wing (0.123 / 0.111 / 0.298 on the first draw, against "
-              "0.133 / 0.119 / 0.297), level 2's payload loses (0.127 against 0.114)", CLEARANCES,
-           lambda: [6, *_clearances(0, HINGES)["nrmse"]["6"], *_clearances(0, GATED_FILTERS)["nrmse"]["6"], 2,
-                    _clearances(0, HINGES)["nrmse"]["2"][2], _clearances(0, GATED_FILTERS)["nrmse"]["2"][2]]),
-    Figure(R, "They cost 22372 coefficients and 261 s of fitting on the first draw", CLEARANCES,
+    Figure(R, "Level 2, where the joint does not knock, keeps its figures; level 6 gains at the drive point and on "
+              "the wing (0.127 / 0.109 / 0.289 on the first draw, against 0.133 / 0.119 / 0.297)", CLEARANCES,
+           lambda: [2 if _clearances(0, HINGES)["nrmse"]["2"] == pytest.approx(
+                        _clearances(0, GATED_FILTERS)["nrmse"]["2"], abs=5e-4) else math.nan,
+                    6, *_clearances(0, HINGES)["nrmse"]["6"], *_clearances(0, GATED_FILTERS)["nrmse"]["6"]]),
+    Figure(R, "They cost 22372 coefficients and 106 s of fitting on the first draw, for seven fits of the filters "
+              "(six held out)", CLEARANCES,
            lambda: [_clearances(0, HINGES)["n_above_band_params"], _clearances(0, HINGES)["map_fit_s"]]),
+    Figure(R, "The mean of the first two draws' models reaches 0.143 on the test multisines and 0.211 on the sweeps, "
+              "in 575 s of fitting (level 6: 0.122 / 0.102 / 0.283, the drive point below the deep LRU's 0.134, the "
+              "wing and the payload above its 0.099 and 0.237); of all three, 0.144 and 0.202 in 826 s", CLEARANCES,
+           lambda: [_clearances_mean(2, HINGES)["mean_nrmse"], _clearances_mean(2, HINGES)["mean_nrmse_sweeps"],
+                    _clearances_mean(2, HINGES)["fit_s"], 6, *_clearances_mean(2, HINGES)["nrmse"]["6"],
+                    *next(v["level 6"] for v in _results("f16_clearances")["published"].values() if "level 6" in v),
+                    _clearances_mean(3, HINGES)["mean_nrmse"], _clearances_mean(3, HINGES)["mean_nrmse_sweeps"],
+                    _clearances_mean(3, HINGES)["fit_s"]]),
     Figure(R, "six layers of 100 states", "Forgione et al., CDC 2024, the case study", lambda: [None]),
     Figure(R, "It has 51 nonlinear parameters where the full model in the states and input has 90 "
               "(the states-only model above: 48)", "the models' structure",
