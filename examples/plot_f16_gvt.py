@@ -260,11 +260,11 @@ if train is not None:
 #   had learnt the training levels' one waveform by heart, it did better on
 #   the test multisines, which are that waveform too, and worse on the
 #   sine sweeps: it now stops on held-out windows. The hinges of the
-#   simulated in-band velocities past a clearance
+#   simulated in-band velocities past a clearance, gated by the state
 #   (``AboveBandRegressor(clearances=...)``), fitted on the estimation
-#   levels' multisines and sine sweeps together, take the test sweeps from
-#   0.236 to 0.220 on one draw, but not the test multisines (0.155 against
-#   0.151): they sound at level 2, where the joint does not knock
+#   levels' multisines and sine sweeps together, gain both waveforms on
+#   every draw, but little: the mean of two draws' models is still 0.143
+#   in the mean, the payload's level 6 far above the deep LRU's figure
 #   (``benchmarks/f16_clearances.py``).
 # - **Amplitudes between the fitted ones.** Every level drives the same
 #   multisine at another amplitude, so the test levels ask how the response
