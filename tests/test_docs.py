@@ -1312,6 +1312,14 @@ FIGURES = [
                     for i, m in enumerate(("DecoupledPNLSSRegressor(18, 3, 3) random", _f16_selected()))][:1]
            + [_f16_row(_f16_above(m))[k] for k in range(3)
               for m in ("DecoupledPNLSSRegressor(18, 3, 3) random", _f16_selected())]),
+    Figure(R, "| the mean of two draws of `DecoupledPNLSSRegressor(18, n_branches=3, degree=5, "
+              "branch_basis=\"signed_powers\", init=\"random\")`, each with the gated filters and the hinges past "
+              "clearances above the band (`benchmarks/f16_clearances.py`; 44744 more coefficients, linear) | 252 | "
+              "0.143 | 575 s |", CLEARANCES,
+           lambda: [*(_clearances(0, None)["model"][k] for k in ("n_states", "n_branches", "degree")),
+                    sum(_clearances(seed, HINGES)["n_above_band_params"] for seed in (0, 1)),
+                    sum(_clearances(seed, None)["n_nonlinear_params"] for seed in (0, 1)),
+                    _clearances_mean(2, HINGES)["mean_nrmse"], _clearances_mean(2, HINGES)["fit_s"]]),
     Figure(R, "error above 15.5 Hz as the force's content there, switched on by a gate quadratic in the state "
               "(fitted to that error's amplitude envelope), through FIR filters of 200 taps", F16,
            lambda: [_f16_model(_f16_above(_f16_selected()))["model"][k] for k in ("cutoff_hz", "n_taps")]),
