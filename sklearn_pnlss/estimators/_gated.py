@@ -159,9 +159,9 @@ def fit_fir(gated, errors, periodic, n_taps, alpha):
 
     The normal matrix is built from the channels' correlations in
     ``O(n_channels^2 n log n)``, never from the design matrix's ``O(n
-    (n_channels n_taps)^2)`` (for the F-16's hinges, 37 channels of 200
-    taps, a thousandth of the flops): summed over the signals, laid out
-    block-Toeplitz once, less the products past each record's end."""
+    (n_channels n_taps)^2)``: summed over the signals, laid out
+    block-Toeplitz once, less the products past each record's end (a
+    product of ``n_taps - 1`` rows a record from rest)."""
     m, k = gated[0].shape[1], errors[0].shape[1]
     corr, rhs, past_end = 0.0, 0.0, []
     for w, r, p in zip(gated, errors, periodic):
