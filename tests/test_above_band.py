@@ -52,6 +52,17 @@ def test_the_filters_from_the_spectra_are_the_ridge_solution_of_the_delay_design
     np.testing.assert_allclose(apply_fir(ws[0], fir, periodic), designs[0] @ expected, atol=1e-12)
 
 
+@pytest.mark.slow
+def test_filters_of_an_order_past_where_threaded_openblas_crashed_are_recovered():
+    # 81 channels of 200 taps: an order of 16,200, where OpenBLAS's threaded Cholesky (and its product of a
+    # matrix with itself) ended the process on 2 cores; the filters behind a from-rest record must come back
+    rng = np.random.default_rng(5)
+    w = rng.standard_normal((20_000, 81))
+    true = rng.standard_normal((81, 200, 1)) / 100
+    fir = fit_fir([w], [apply_fir(w, true, False)], [False], 200, 1e-12)
+    np.testing.assert_allclose(fir, true, atol=1e-6)
+
+
 def test_motions_are_integrated_in_the_band_differenced_and_hinged():
     t = np.arange(1000)
     acc = np.column_stack([np.cos(2 * np.pi * 0.05 * t) + 3.0, 2 * np.cos(2 * np.pi * 0.2 * t)])

@@ -13,6 +13,8 @@ from numpy.lib.stride_tricks import sliding_window_view
 from scipy import fft as sfft
 from scipy import linalg
 
+from ..utils.threads import cholesky_threads_for
+
 __all__ = ["above_cutoff", "apply_fir", "envelope", "fit_fir", "fit_gate", "gate", "hinges", "integral_in_band",
            "lagged", "relative_motions"]
 
@@ -130,9 +132,9 @@ def _correlations(w, r, n_taps, periodic):
     spectra rather than ``A``: ``corr[i, j, d + n_taps - 1] = sum_s w_i(s)
     w_j(s + d)`` for ``|d| < n_taps`` (``A^T A``'s block ``i, j`` is
     ``corr[i, j]`` at ``a - b``), ``cross[i, a, k] = sum_t w_i(t - a)
-    r_k(t)`` (``A^T r``), and from rest the rows ``P`` with ``P^T P`` the
-    products past the record's end that the correlations hold and ``A``
-    does not (None for a periodic signal)."""
+    r_k(t)`` (``A^T r``), and from rest the record's last ``n_taps - 1``
+    samples read backwards, whose products the correlations hold past the
+    record's end and ``A`` does not (None for a periodic signal)."""
     m = w.shape[1]
     W, n = _spectra(w, n_taps, periodic)
     lags = np.r_[n - (n_taps - 1):n, 0:n_taps]  # delays -(n_taps - 1) .. n_taps - 1
@@ -141,15 +143,26 @@ def _correlations(w, r, n_taps, periodic):
         corr[i, i:] = sfft.irfft(np.conj(W[:, i:i + 1]) * W[:, i:], n, axis=0, workers=-1)[lags].T
         corr[i:, i] = corr[i, i:, ::-1]
     cross = sfft.irfft(np.conj(W)[:, :, None] * sfft.rfft(r, n, axis=0)[:, None, :], n, axis=0, workers=-1)
-    past_end = None
-    if not periodic:
-        # the sum over t stops at the record's last sample for every delay; the linear correlation sums
-        # every overlap: the difference is the gram of the last n_taps - 1 samples read backwards, delayed
-        tail = w[::-1][:n_taps - 1]
-        back = np.arange(n_taps)[None, :] - np.arange(1, n_taps)[:, None]
-        past_end = np.where(back[:, None, :] >= 0, tail[np.maximum(back, 0)].transpose(0, 2, 1), 0.0)
-        past_end = past_end.reshape(n_taps - 1, m * n_taps)
-    return corr, cross[:n_taps].transpose(1, 0, 2), past_end
+    tail = None if periodic else w[::-1][:n_taps - 1]  # the record's last samples, read backwards
+    return corr, cross[:n_taps].transpose(1, 0, 2), tail
+
+
+def _subtract_past_end(blocks, tails):
+    """Take from the normal matrix ``blocks`` (its ``i, a, j, b`` entry at
+    ``[i, a, j, b]``) the products past the records' ends: ``sum_{u=1}^{min(a,
+    b)} z_i(a - u) z_j(b - u)`` for each record's tail ``z`` (``tails``: one
+    (n_taps - 1, n_channels) array a record). Along a diagonal each entry is
+    the one before it plus ``z_i(a - 1) z_j(b - 1)``, a recursion of
+    ``n_channels^2 n_taps^2`` operations where the product of the tails'
+    delay rows takes ``n_taps`` times more (and OpenBLAS's threaded product
+    of a matrix with itself crashes at the orders many clearances reach)."""
+    m, n_taps = blocks.shape[0], blocks.shape[1]
+    later = tails[:, :n_taps - 1, :].reshape(tails.shape[0], -1)  # (records, b * m + j)
+    running = np.zeros((m, m, n_taps))  # [i, j, b]: the sum at the current a
+    for a in range(1, n_taps):
+        step = (tails[:, a - 1, :].T @ later).reshape(m, n_taps - 1, m).transpose(0, 2, 1)
+        running[:, :, 1:] = running[:, :, :-1] + step
+        blocks[:, a, :, :] -= running
 
 
 def fit_fir(gated, errors, periodic, n_taps, alpha):
@@ -160,28 +173,28 @@ def fit_fir(gated, errors, periodic, n_taps, alpha):
     The normal matrix is built from the channels' correlations in
     ``O(n_channels^2 n log n)``, never from the design matrix's ``O(n
     (n_channels n_taps)^2)``: summed over the signals, laid out
-    block-Toeplitz once, less the products past each record's end (a
-    product of ``n_taps - 1`` rows a record from rest)."""
+    block-Toeplitz once, less the products past each record's end."""
     m, k = gated[0].shape[1], errors[0].shape[1]
-    corr, rhs, past_end = 0.0, 0.0, []
+    corr, rhs, tails = 0.0, 0.0, []
     for w, r, p in zip(gated, errors, periodic):
         c, x, tail = _correlations(w, r, n_taps, p)
         corr, rhs = corr + c, rhs + x
-        past_end += [] if tail is None else [tail]
+        tails += [] if tail is None else [tail]
     # block (i, j) at (a, b) is corr[i, j] at a - b: the windows of the delays read backwards
     windows = sliding_window_view(corr[:, :, ::-1], n_taps, axis=2)[:, :, ::-1]  # (i, j, a, b)
     normal = np.empty((m * n_taps, m * n_taps))
-    normal.reshape(m, n_taps, m, n_taps)[...] = windows.transpose(0, 2, 1, 3)
-    if past_end:
-        past_end = np.vstack(past_end)
-        normal -= past_end.T @ past_end
+    blocks = normal.reshape(m, n_taps, m, n_taps)
+    blocks[...] = windows.transpose(0, 2, 1, 3)
+    if tails:
+        _subtract_past_end(blocks, np.stack(tails))
     rhs = rhs.reshape(m * n_taps, k)
     scale = np.trace(normal) / normal.shape[0]
     if scale <= 0:  # nothing gated through: nothing to fit
         coef = np.zeros_like(rhs)
     else:
         normal[np.diag_indices(normal.shape[0])] += alpha * scale
-        coef = linalg.solve(normal, rhs, assume_a="pos", overwrite_a=True, check_finite=False)
+        with cholesky_threads_for(normal.shape[0]):
+            coef = linalg.solve(normal, rhs, assume_a="pos", overwrite_a=True, check_finite=False)
     return coef.reshape(m, n_taps, k)
 
 
