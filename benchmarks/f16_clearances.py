@@ -42,6 +42,8 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import bench_f16  # noqa: E402
 from _bench_utils import RESULTS, header, write_results  # noqa: E402
@@ -69,8 +71,6 @@ class MeanOfMembers:
         self.n_params_ = sum(m.n_params_ for m in members)
 
     def predict(self, X):
-        import numpy as np
-
         return np.mean([m.predict(X) for m in self.estimators_], axis=0)
 
 
@@ -87,8 +87,6 @@ def held_out_alpha(fit_map, X, y, train_sweeps):
     estimation levels 3 and 5 best (each in turn, its multisine and its
     sweep; the model inside fitted on all four, only the map held out), and
     the held-out NRMSE of each."""
-    import numpy as np
-
     scores = {}
     for alpha in HINGE_ALPHAS:
         errors = []
