@@ -18,7 +18,7 @@ from ..utils.threads import cholesky_threads_for
 __all__ = ["above_cutoff", "apply_fir", "envelope", "fit_fir", "fit_gate", "gate", "hinges", "integral_in_band",
            "lagged", "relative_motions"]
 
-# Rows of a design matrix held at once (8192 x 200 taps: 13 MB).
+# Rows of the gate's features held at once (8192 x 172 for 18 states: 11 MB).
 ROWS_PER_BLOCK = 8192
 
 
