@@ -13,7 +13,7 @@ from numpy.lib.stride_tricks import sliding_window_view
 from scipy import fft as sfft
 from scipy import linalg
 
-from ..utils.threads import cholesky_threads_for
+from ..utils.threads import symmetric_threads_for
 
 __all__ = ["above_cutoff", "apply_fir", "envelope", "fit_fir", "fit_gate", "gate", "hinges", "integral_in_band",
            "lagged", "relative_motions"]
@@ -193,7 +193,7 @@ def fit_fir(gated, errors, periodic, n_taps, alpha):
         coef = np.zeros_like(rhs)
     else:
         normal[np.diag_indices(normal.shape[0])] += alpha * scale
-        with cholesky_threads_for(normal.shape[0]):
+        with symmetric_threads_for(normal.shape[0]):
             coef = linalg.solve(normal, rhs, assume_a="pos", overwrite_a=True, check_finite=False)
     return coef.reshape(m, n_taps, k)
 

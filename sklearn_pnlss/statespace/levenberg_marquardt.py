@@ -48,7 +48,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.linalg import LinAlgError, cho_factor, cho_solve
 
-from ..utils.threads import cholesky_threads_for
+from ..utils.threads import symmetric_threads_for
 
 __all__ = ["LMResult", "levenberg_marquardt", "lm_step_basis"]
 
@@ -124,7 +124,7 @@ class _CholeskySteps:
         positive definite."""
         damped = self.Gs + mu * np.eye(self.gs.size)
         try:
-            with cholesky_threads_for(self.gs.size):
+            with symmetric_threads_for(self.gs.size):
                 factor = cho_factor(damped, lower=True, overwrite_a=True, check_finite=False)
         except LinAlgError:
             return None

@@ -19,7 +19,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numba
 import numpy as np
 
-from ..utils.threads import one_blas_thread, over_column_spans
+from ..utils.threads import one_blas_thread, over_column_spans, symmetric_threads_for
 
 __all__ = ["SimulationError", "weigh"]
 
@@ -263,14 +263,15 @@ class SimulationError:
             return sum(G for G, _ in parts), sum(g for _, g in parts)
 
         dtype = jacobian_dtype(model.n_params)
-        result = sums(dtype)
-        if dtype == np.float64 or result is None or all(np.all(np.isfinite(a)) for a in result):
-            return result
-        # Single precision ends at 3e38: a model far from its data (a start
-        # on badly scaled signals) can have sensitivities whose products
-        # overflow there and not in double precision; those normal
-        # equations are formed again in double precision.
-        return sums(np.float64)
+        with symmetric_threads_for(model.n_params + model.n_states):  # the Gram's order, start states included
+            result = sums(dtype)
+            if dtype == np.float64 or result is None or all(np.all(np.isfinite(a)) for a in result):
+                return result
+            # Single precision ends at 3e38: a model far from its data (a
+            # start on badly scaled signals) can have sensitivities whose
+            # products overflow there and not in double precision; those
+            # normal equations are formed again in double precision.
+            return sums(np.float64)
 
 
 def _fold_start_states(G, g, start_states, n_sx):

@@ -9,7 +9,7 @@ from functools import lru_cache
 
 from threadpoolctl import ThreadpoolController
 
-__all__ = ["one_blas_thread", "blas_threads_for", "cholesky_threads_for", "each_in_threads", "over_column_spans"]
+__all__ = ["one_blas_thread", "blas_threads_for", "symmetric_threads_for", "each_in_threads", "over_column_spans"]
 
 _CONTROLLER = None  # made once: each one scans the loaded libraries (tens of ms)
 _LIMIT_LOCK = threading.Lock()
@@ -79,23 +79,25 @@ def blas_threads_for(flops):
     return one_blas_thread() if flops < SMALL_BLAS_FLOPS else nullcontext()
 
 
-#: The order of a positive definite system above which its Cholesky
-#: factorisation runs on one BLAS thread. OpenBLAS's threaded ``dpotrf`` (as
-#: the numpy and scipy wheels ship it) ended the process with a segmentation
-#: fault on 2 cores here from an order of 16,384 (15,500 passed; on one thread
-#: 17,000 passed), in numpy and scipy alike: a crash of its threaded kernels
-#: on large matrices that its tracker has seen since its first releases
-#: (``tests/test_above_band.py`` holds a fit of an order of 16,200). Below the
-#: bound the factorisation keeps every core: the F-16's filters past three
+#: The order of a symmetric product above which it runs on one BLAS thread:
+#: a Gram matrix ``X^T X`` (syrk) or a Cholesky factorisation (potrf, whose
+#: updates are syrk too). OpenBLAS's threaded kernels (as the numpy and scipy
+#: wheels ship them) ended the process with a segmentation fault on 2 cores
+#: here: a factorisation from an order of 16,384 (15,500 passed; on one
+#: thread 17,000 passed), in numpy and scipy alike, and numpy's ``A.T @ A``
+#: of a 796 x 17,000 ``A`` (200 x 17,000 passed), a crash of its threaded
+#: kernels on large matrices that its tracker has seen since its first
+#: releases (``tests/test_above_band.py`` holds a fit of an order of 16,200).
+#: Below the bound every core is kept: the F-16's filters past three
 #: clearances, an order of 7,400, are solved in about 4 s on 2 cores.
-LARGE_CHOLESKY_ORDER = 12_000
+LARGE_SYMMETRIC_ORDER = 12_000
 
 
-def cholesky_threads_for(order):
-    """Context manager: :func:`one_blas_thread` for the Cholesky
-    factorisation of a system of ``order`` above
-    :data:`LARGE_CHOLESKY_ORDER`, BLAS as configured otherwise."""
-    return one_blas_thread() if order > LARGE_CHOLESKY_ORDER else nullcontext()
+def symmetric_threads_for(order):
+    """Context manager: :func:`one_blas_thread` for a Gram matrix or a
+    Cholesky factorisation of ``order`` above
+    :data:`LARGE_SYMMETRIC_ORDER`, BLAS as configured otherwise."""
+    return one_blas_thread() if order > LARGE_SYMMETRIC_ORDER else nullcontext()
 
 
 @lru_cache(maxsize=1)
