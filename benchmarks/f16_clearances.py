@@ -124,7 +124,8 @@ def draw_rows(seed, start, start_s, X, y, train_sweeps, test):
         wrapped = fit_map(alpha, range(len(bench_f16.TRAIN_LEVELS)))
         map_s = time.perf_counter() - t0
         if held_out:
-            print(f"alpha chosen on held-out levels 3 and 5: {alpha} (mean NRMSE there: "
+            levels = " and ".join(map(str, HELD_OUT_LEVELS))
+            print(f"alpha chosen on held-out levels {levels}: {alpha} (mean NRMSE there: "
                   + ", ".join(f"{k}: {v:.4f}" for k, v in held_out.items()) + ")", flush=True)
         extra = {"n_params": int(decoupled.n_params_ + wrapped.n_map_params_),
                  "n_above_band_params": int(wrapped.n_map_params_), "map_fit_s": map_s,
@@ -145,8 +146,8 @@ def averaged_rows(draw_models, start_s, test):
     rows = []
     for route in ROUTES:
         for k in range(2, len(draw_models) + 1):
-            members = [draw_models[seed][route] for seed in list(draw_models)[:k]]
             seeds = list(draw_models)[:k]
+            members = [draw_models[seed][route] for seed in seeds]
             rows.append(bench_f16.entry(f"mean of draws {seeds}: {route}", {"route": route, "draws": seeds},
                                         MeanOfMembers([m for m, _ in members]), test,
                                         start_s + sum(s for _, s in members)))
