@@ -81,7 +81,10 @@ J^T J at the BLAS rate measured on the same machine is printed beside it.
 
 Results go to ``benchmarks/results/f16.json``; its ``best`` entry holds
 ``model``, ``mean_nrmse`` (outputs and levels 2, 4, 6), ``nrmse`` (per
-level, per output), ``fit_s`` and ``peak_memory_mb``.
+level, per output), ``fit_s`` and ``peak_memory_mb`` of the best of its
+rows. The best model of the F-16 benchmarks (the hinges above the band,
+the mean of two draws) is ``f16_clearances.py``'s: the same fields under
+``best`` in ``results/f16_clearances.json``.
 """
 import argparse
 import os
@@ -100,6 +103,7 @@ from _bench_utils import REPO, RESULTS, header, write_results  # noqa: E402
 DEFAULT_DATA = Path(os.environ.get("SKLEARN_PNLSS_F16_DATA", REPO.parent / "shared" / "data" / "f16"))
 TRAIN_LEVELS = (1, 3, 5, 7)
 TEST_LEVELS = (2, 4, 6)
+FIT_BUDGET_S = 600.0  # the issue's "fitted in under 10 minutes"
 # Published NRMSE on the test levels (see the F-16 issue and the guide).
 PUBLISHED = {
     "REN, Revay, Wang & Manchester, IEEE TAC 2023 (mean over levels 2, 4, 6)": {"mean": 0.162},
@@ -288,6 +292,18 @@ def non_periodic_floor(test, period=8192):
         spread = np.mean((Y - Y.mean(axis=0)) ** 2, axis=(0, 1)) * Y.shape[0] / (Y.shape[0] - 1)
         per_level[str(lv)] = np.sqrt(spread / np.mean(Y**2, axis=(0, 1))).tolist()
     return {"nrmse": per_level, "mean": float(np.mean(list(per_level.values())))}
+
+
+def best_within_budget(rows):
+    """The row of lowest mean test NRMSE among those fitted in under
+    FIT_BUDGET_S, printed; None when no row is."""
+    within = [row for row in rows if row["fit_s"] < FIT_BUDGET_S]
+    if not within:
+        return None
+    best = min(within, key=lambda row: row["mean_nrmse"])
+    print(f"best within {FIT_BUDGET_S:.0f} s: {best['model']['estimator']}, mean NRMSE {best['mean_nrmse']:.3f}, "
+          f"sweeps {best['mean_nrmse_sweeps']:.3f}, fit {best['fit_s']:.0f} s", flush=True)
+    return best
 
 
 def print_floor(what, floor):

@@ -40,7 +40,6 @@ import bench_f16  # noqa: E402
 from _bench_utils import RESULTS, header, write_results  # noqa: E402
 
 STATES, BRANCHES, DEGREE, BASIS = 18, 3, 5, "signed_powers"
-FIT_BUDGET_S = 600.0  # the "fitted in under 10 minutes"
 
 
 def first_members(averaged, k):
@@ -127,12 +126,7 @@ def main(argv=None):
         averages, members = fit_averaged(start, start_s, X, y, test, args.members, stable_at_rest)
         results["runs"].append({"stable_at_rest": stable_at_rest, "averages": averages, "members": members})
         write_results(results, args.output)
-    within = [row for run in results["runs"] for row in run["averages"] if row["fit_s"] < FIT_BUDGET_S]
-    results["best"] = min(within, key=lambda row: row["mean_nrmse"]) if within else None
-    if results["best"]:
-        print(f"best within {FIT_BUDGET_S:.0f} s: {results['best']['model']['estimator']}, mean NRMSE "
-              f"{results['best']['mean_nrmse']:.3f}, sweeps {results['best']['mean_nrmse_sweeps']:.3f}, "
-              f"fit {results['best']['fit_s']:.0f} s", flush=True)
+    results["best"] = bench_f16.best_within_budget([row for run in results["runs"] for row in run["averages"]])
     write_results(results, args.output)
 
 
