@@ -26,9 +26,9 @@ def above_cutoff(signal, cutoff, fs):
     """The content of each channel of one (n_samples, n_channels) signal
     strictly above ``cutoff`` (zero phase: the DFT of the whole record with
     the lines at and below ``cutoff`` set to zero)."""
-    spectrum = np.fft.rfft(signal, axis=0)
-    spectrum[np.fft.rfftfreq(signal.shape[0], 1.0 / fs) <= cutoff] = 0.0
-    return np.fft.irfft(spectrum, signal.shape[0], axis=0)
+    spectrum = sfft.rfft(signal, axis=0, workers=-1)
+    spectrum[sfft.rfftfreq(signal.shape[0], 1.0 / fs) <= cutoff] = 0.0
+    return sfft.irfft(spectrum, signal.shape[0], axis=0, workers=-1)
 
 
 def integral_in_band(signal, low, high, fs, n_integrations):
@@ -36,12 +36,12 @@ def integral_in_band(signal, low, high, fs, n_integrations):
     times in time (zero phase: divided by ``(2 pi i f)**n`` on the DFT of
     the whole record). The lines at and below ``low`` are dropped, as
     integration would magnify their drift."""
-    spectrum = np.fft.rfft(signal, axis=0)
-    f = np.fft.rfftfreq(signal.shape[0], 1.0 / fs)
+    spectrum = sfft.rfft(signal, axis=0, workers=-1)
+    f = sfft.rfftfreq(signal.shape[0], 1.0 / fs)
     keep = (f > low) & (f <= high)
     spectrum[~keep] = 0.0
     spectrum[keep] /= (2j * np.pi * f[keep, None]) ** n_integrations
-    return np.fft.irfft(spectrum, signal.shape[0], axis=0)
+    return sfft.irfft(spectrum, signal.shape[0], axis=0, workers=-1)
 
 
 def relative_motions(motion):
@@ -117,34 +117,40 @@ def gate(x, coef):
     return np.maximum(coef[0] + np.einsum("ti,ti->t", x @ form, x), 0.0)
 
 
-def _spectra(w, n_taps, periodic):
-    """The rfft of each column of ``w`` and its length: the signal's own
-    (circular correlations for a periodic signal in steady state), or padded
-    by ``n_taps`` so that the circular ones equal the linear ones at every
+def _fft_length(n_samples, n_taps, periodic):
+    """The transform length of a signal's correlations: its own (circular
+    correlations for a periodic signal in steady state), or padded by
+    ``n_taps`` so that the circular ones equal the linear ones at every
     delay of the filters (from rest)."""
-    n = w.shape[0] if periodic else sfft.next_fast_len(w.shape[0] + n_taps, real=True)
-    return sfft.rfft(w, n, axis=0), n
+    return n_samples if periodic else sfft.next_fast_len(n_samples + n_taps, real=True)
 
 
-def _correlations(w, r, n_taps, periodic):
-    """What the delay design ``A`` of one signal ``w`` (``lagged``
-    reshaped) and its error ``r`` give the normal equations, from the
-    spectra rather than ``A``: ``corr[i, j, d + n_taps - 1] = sum_s w_i(s)
-    w_j(s + d)`` for ``|d| < n_taps`` (``A^T A``'s block ``i, j`` is
-    ``corr[i, j]`` at ``a - b``), ``cross[i, a, k] = sum_t w_i(t - a)
-    r_k(t)`` (``A^T r``), and from rest the record's last ``n_taps - 1``
-    samples read backwards, whose products the correlations hold past the
-    record's end and ``A`` does not (None for a periodic signal)."""
-    m = w.shape[1]
-    W, n = _spectra(w, n_taps, periodic)
+def _spectra(w, n_taps, periodic):
+    """The rfft of each column of ``w`` and its transform length."""
+    n = _fft_length(w.shape[0], n_taps, periodic)
+    return sfft.rfft(w, n, axis=0, workers=-1), n
+
+
+def _correlations(signals, n, n_taps):
+    """What the delay designs ``A`` of signals of one transform length give
+    the normal equations, summed over them, from the spectra rather than
+    ``A``: ``corr[i, j, d + n_taps - 1] = sum_s w_i(s) w_j(s + d)`` for ``|d|
+    < n_taps`` (``A^T A``'s block ``i, j`` is ``corr[i, j]`` at ``a - b``)
+    and ``cross[i, a, k] = sum_t w_i(t - a) r_k(t)`` (``A^T r``).
+    ``signals``: ``(spectrum of w, spectrum of the error r)`` of each signal,
+    at the transform length ``n``. Correlations add up over signals, so do their
+    spectra: one inverse transform for all of them (the estimation levels
+    of a benchmark share their length)."""
+    m = signals[0][0].shape[1]
     lags = np.r_[n - (n_taps - 1):n, 0:n_taps]  # delays -(n_taps - 1) .. n_taps - 1
     corr = np.empty((m, m, lags.size))
     for i in range(m):  # c_ji(d) = c_ij(-d): the pairs j >= i only
-        corr[i, i:] = sfft.irfft(np.conj(W[:, i:i + 1]) * W[:, i:], n, axis=0, workers=-1)[lags].T
+        products = sum(np.conj(W[:, i:i + 1]) * W[:, i:] for W, _ in signals)
+        corr[i, i:] = sfft.irfft(products, n, axis=0, workers=-1)[lags].T
         corr[i:, i] = corr[i, i:, ::-1]
-    cross = sfft.irfft(np.conj(W)[:, :, None] * sfft.rfft(r, n, axis=0)[:, None, :], n, axis=0, workers=-1)
-    tail = None if periodic else w[::-1][:n_taps - 1]  # the record's last samples, read backwards
-    return corr, cross[:n_taps].transpose(1, 0, 2), tail
+    products = sum(np.conj(W)[:, :, None] * R[:, None, :] for W, R in signals)
+    cross = sfft.irfft(products, n, axis=0, workers=-1)
+    return corr, cross[:n_taps].transpose(1, 0, 2)
 
 
 def _subtract_past_end(blocks, tails):
@@ -175,11 +181,17 @@ def fit_fir(gated, errors, periodic, n_taps, alpha):
     (n_channels n_taps)^2)``: summed over the signals, laid out
     block-Toeplitz once, less the products past each record's end."""
     m, k = gated[0].shape[1], errors[0].shape[1]
-    corr, rhs, tails = 0.0, 0.0, []
+    by_length = {}
     for w, r, p in zip(gated, errors, periodic):
-        c, x, tail = _correlations(w, r, n_taps, p)
+        n = _fft_length(w.shape[0], n_taps, p)
+        by_length.setdefault(n, []).append((sfft.rfft(w, n, axis=0, workers=-1), sfft.rfft(r, n, axis=0, workers=-1)))
+    corr, rhs = 0.0, 0.0
+    for n, signals in by_length.items():
+        c, x = _correlations(signals, n, n_taps)
         corr, rhs = corr + c, rhs + x
-        tails += [] if tail is None else [tail]
+    # from rest, the records' last n_taps - 1 samples read backwards: the correlations hold their products past
+    # the record's end, the delay design does not
+    tails = [w[::-1][:n_taps - 1] for w, p in zip(gated, periodic) if not p]
     # block (i, j) at (a, b) is corr[i, j] at a - b: the windows of the delays read backwards
     windows = sliding_window_view(corr[:, :, ::-1], n_taps, axis=2)[:, :, ::-1]  # (i, j, a, b)
     normal = np.empty((m * n_taps, m * n_taps))

@@ -363,12 +363,17 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
             motions = [self._motions(s) for s in signals]
             self.motion_scale_ = np.max([np.sqrt(np.mean(m**2, axis=0)) for m in motions], axis=0)
             self.motion_scale_[self.motion_scale_ == 0] = 1.0
+            # the hinges in the gated input's units: computed once here in units of 1, then scaled
             self.hinge_scale_ = 1.0
-            gated_rms = np.sqrt(np.mean(np.vstack([self._gated(s) for s in signals]) ** 2))
-            hinge_rms = np.sqrt(np.mean(np.vstack([self._gated_hinges(s) for s in signals]) ** 2))
+            gated = [self._gated(s) for s in signals]
+            kinks = [self._gated_hinges(s) for s in signals]
+            gated_rms, hinge_rms = (np.sqrt(np.mean(np.vstack(w) ** 2)) for w in (gated, kinks))
             if gated_rms > 0 and hinge_rms > 0:
                 self.hinge_scale_ = gated_rms / hinge_rms
-        inputs = [self._map_input(s) for s in signals]
+            inputs = [np.hstack([self._ahead(g, s), self._ahead(self.hinge_scale_ * h, s)])
+                      for g, h, s in zip(gated, kinks, signals)]
+        else:
+            inputs = [self._map_input(s) for s in signals]
         if self.hidden_units is None:
             self.fir_ = fit_fir(inputs, residual, [s.periodic for s in signals], self.n_taps, self.alpha)
             self.n_map_params_ = self.gate_coef_.size + self.fir_.size
