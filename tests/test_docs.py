@@ -1315,7 +1315,7 @@ FIGURES = [
     Figure(R, "| the mean of two draws of `DecoupledPNLSSRegressor(18, n_branches=3, degree=5, "
               "branch_basis=\"signed_powers\", init=\"random\")`, each with the gated filters and the hinges past "
               "clearances above the band (`benchmarks/f16_clearances.py`; 44744 more coefficients, linear) | 252 | "
-              "0.143 | 592 s |", CLEARANCES,
+              "0.143 | 553 s |", CLEARANCES,
            lambda: [*(_clearances(0, None)["model"][k] for k in ("n_states", "n_branches", "degree")),
                     sum(_clearances(seed, HINGES)["n_above_band_params"] for seed in (0, 1)),
                     sum(_clearances(seed, None)["n_nonlinear_params"] for seed in (0, 1)),
@@ -1577,12 +1577,12 @@ FIGURES = [
            lambda: [2 if _clearances(0, HINGES)["nrmse"]["2"] == pytest.approx(
                         _clearances(0, GATED_FILTERS)["nrmse"]["2"], abs=5e-4) else math.nan,
                     6, *_clearances(0, HINGES)["nrmse"]["6"], *_clearances(0, GATED_FILTERS)["nrmse"]["6"]]),
-    Figure(R, "They cost 22372 coefficients and 102 s of fitting on the first draw, for seven fits of the filters "
+    Figure(R, "They cost 22372 coefficients and 84 s of fitting on the first draw, for seven fits of the filters "
               "(six held out)", CLEARANCES,
            lambda: [_clearances(0, HINGES)["n_above_band_params"], _clearances(0, HINGES)["map_fit_s"]]),
     Figure(R, "The mean of the first two draws' models reaches 0.143 on the test multisines and 0.211 on the sweeps, "
-              "in 592 s of fitting (level 6: 0.122 / 0.102 / 0.283, the drive point below the deep LRU's 0.134, the "
-              "wing and the payload above its 0.099 and 0.237); of all three, 0.144 and 0.202 in 845 s", CLEARANCES,
+              "in 553 s of fitting (level 6: 0.122 / 0.102 / 0.283, the drive point below the deep LRU's 0.134, the "
+              "wing and the payload above its 0.099 and 0.237); of all three, 0.144 and 0.202 in 791 s", CLEARANCES,
            lambda: [_clearances_mean(2, HINGES)["mean_nrmse"], _clearances_mean(2, HINGES)["mean_nrmse_sweeps"],
                     _clearances_mean(2, HINGES)["fit_s"], 6, *_clearances_mean(2, HINGES)["nrmse"]["6"],
                     *next(v["level 6"] for v in _results("f16_clearances")["published"].values() if "level 6" in v),
