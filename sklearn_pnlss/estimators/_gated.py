@@ -178,8 +178,9 @@ def fit_fir(gated, errors, periodic, n_taps, alpha):
 
     The normal matrix is built from the channels' correlations in
     ``O(n_channels^2 n log n)``, never from the design matrix's ``O(n
-    (n_channels n_taps)^2)``: summed over the signals, laid out
-    block-Toeplitz once, less the products past each record's end."""
+    (n_channels n_taps)^2)``: summed over the signals (as spectra, for
+    records of one length: one inverse transform for all of them), laid
+    out block-Toeplitz once, less the products past each record's end."""
     m, k = gated[0].shape[1], errors[0].shape[1]
     by_length = {}
     for w, r, p in zip(gated, errors, periodic):
