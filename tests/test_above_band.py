@@ -39,15 +39,15 @@ def test_lagged_holds_each_channel_delayed_circularly_or_from_rest():
 @pytest.mark.parametrize("n_channels", [1, 3])
 def test_the_filters_from_the_spectra_are_the_ridge_solution_of_the_delay_design(periodic, n_channels):
     # the normal equations come from the channels' correlations, never the design matrix: they must be its own,
-    # summed over signals of other lengths
+    # summed over signals of other lengths and of the same length (whose spectra are summed before one inverse)
     rng = np.random.default_rng(3)
-    ws = [rng.standard_normal((n, n_channels)) for n in (301, 123)]
-    rs = [rng.standard_normal((n, 2)) for n in (301, 123)]
+    ws = [rng.standard_normal((n, n_channels)) for n in (301, 123, 301)]
+    rs = [rng.standard_normal((n, 2)) for n in (301, 123, 301)]
     designs = [lagged(w, 7, periodic).reshape(w.shape[0], -1) for w in ws]
     normal = sum(d.T @ d for d in designs)
     ridge = 1e-3 * np.trace(normal) / normal.shape[0]
     expected = np.linalg.solve(normal + ridge * np.eye(7 * n_channels), sum(d.T @ r for d, r in zip(designs, rs)))
-    fir = fit_fir(ws, rs, [periodic] * 2, 7, 1e-3)
+    fir = fit_fir(ws, rs, [periodic] * 3, 7, 1e-3)
     np.testing.assert_allclose(fir.reshape(-1, 2), expected, rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(apply_fir(ws[0], fir, periodic), designs[0] @ expected, atol=1e-12)
 

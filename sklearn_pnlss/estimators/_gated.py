@@ -117,17 +117,12 @@ def gate(x, coef):
     return np.maximum(coef[0] + np.einsum("ti,ti->t", x @ form, x), 0.0)
 
 
-def _fft_length(n_samples, n_taps, periodic):
-    """The transform length of a signal's correlations: its own (circular
-    correlations for a periodic signal in steady state), or padded by
-    ``n_taps`` so that the circular ones equal the linear ones at every
-    delay of the filters (from rest)."""
-    return n_samples if periodic else sfft.next_fast_len(n_samples + n_taps, real=True)
-
-
 def _spectra(w, n_taps, periodic):
-    """The rfft of each column of ``w`` and its transform length."""
-    n = _fft_length(w.shape[0], n_taps, periodic)
+    """The rfft of each column of ``w`` and its length: the signal's own
+    (circular correlations for a periodic signal in steady state), or padded
+    by ``n_taps`` so that the circular ones equal the linear ones at every
+    delay of the filters (from rest)."""
+    n = w.shape[0] if periodic else sfft.next_fast_len(w.shape[0] + n_taps, real=True)
     return sfft.rfft(w, n, axis=0, workers=-1), n
 
 
@@ -184,8 +179,8 @@ def fit_fir(gated, errors, periodic, n_taps, alpha):
     m, k = gated[0].shape[1], errors[0].shape[1]
     by_length = {}
     for w, r, p in zip(gated, errors, periodic):
-        n = _fft_length(w.shape[0], n_taps, p)
-        by_length.setdefault(n, []).append((sfft.rfft(w, n, axis=0, workers=-1), sfft.rfft(r, n, axis=0, workers=-1)))
+        W, n = _spectra(w, n_taps, p)
+        by_length.setdefault(n, []).append((W, sfft.rfft(r, n, axis=0, workers=-1)))
     corr, rhs = 0.0, 0.0
     for n, signals in by_length.items():
         c, x = _correlations(signals, n, n_taps)

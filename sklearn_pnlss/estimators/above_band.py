@@ -370,8 +370,7 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
             gated_rms, hinge_rms = (np.sqrt(np.mean(np.vstack(w) ** 2)) for w in (gated, kinks))
             if gated_rms > 0 and hinge_rms > 0:
                 self.hinge_scale_ = gated_rms / hinge_rms
-            inputs = [np.hstack([self._ahead(g, s), self._ahead(self.hinge_scale_ * h, s)])
-                      for g, h, s in zip(gated, kinks, signals)]
+            inputs = [self._map_input(s, g, self.hinge_scale_ * h) for s, g, h in zip(signals, gated, kinks)]
         else:
             inputs = [self._map_input(s) for s in signals]
         if self.hidden_units is None:
@@ -439,16 +438,18 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
             return np.roll(w, -self.n_lead, axis=0)
         return np.vstack([w[self.n_lead :], np.zeros((min(self.n_lead, w.shape[0]), w.shape[1]))])
 
-    def _map_input(self, signal):
+    def _map_input(self, signal, gated=None, kinks=None):
         """What the map above ``cutoff`` reads along one signal: for the FIR
         filters the gated input, and the hinges with ``clearances``; for the
         network, its windows of the prediction below ``cutoff`` beside the
-        gated input. ``n_lead`` samples ahead."""
-        gated = self._ahead(self._gated(signal), signal)
+        gated input. ``n_lead`` samples ahead. ``gated`` and ``kinks``: the
+        signal's ``_gated`` and ``_gated_hinges`` when already computed."""
+        gated = self._ahead(self._gated(signal) if gated is None else gated, signal)
         if self.hidden_units is None:
             if self.clearances is None:
                 return gated
-            return np.hstack([gated, self._ahead(self._gated_hinges(signal), signal)])
+            kinks = self._gated_hinges(signal) if kinks is None else kinks
+            return np.hstack([gated, self._ahead(kinks, signal)])
         below = signal.prediction - above_cutoff(signal.prediction, self.cutoff, self.fs)
         channels = [below, gated] + ([signal.input_below] if self.in_band else [])
         return windows(np.hstack(channels), self.n_taps, self.window_stride, signal.periodic)
