@@ -20,8 +20,9 @@ fitted on the multisines of levels 1, 3, 5 and 7) is kept as it is
   of each difference of two, past the clearances 0.5, 1 and 1.5 (in units
   of each velocity's largest training rms), gated by the state like the
   force; the ridge ``alpha`` among 1e-3, 1e-2 and 1e-1 is the one whose
-  map predicts the held-out estimation levels 3 and 5 best (each in turn,
-  its multisine and its sweep; only the map held out).
+  filters predict the held-out estimation levels 3 and 5 best (each in
+  turn, its multisine and its sweep; ``AboveBandRegressor``'s ``cv``: only
+  the filters held out, the model, the gate and the scales fitted on all).
 
 A multisine repeats one waveform at every level, so filters fitted on it
 alone may learn that record's timing instead of the contacts; the sweeps
@@ -84,20 +85,17 @@ def map_signals(X, y, train_sweeps, levels, sweeps):
     return X_map, y_map
 
 
-def held_out_alpha(fit_map, X, y, train_sweeps):
-    """The ridge among HINGE_ALPHAS whose map predicts the held-out
-    estimation levels 3 and 5 best (each in turn, its multisine and its
-    sweep; the model inside fitted on all four, only the map held out), and
-    the held-out NRMSE of each."""
-    scores = {}
-    for alpha in HINGE_ALPHAS:
-        errors = []
-        for held in (bench_f16.TRAIN_LEVELS.index(lv) for lv in HELD_OUT_LEVELS):
-            wrapped = fit_map(alpha, [i for i in range(len(bench_f16.TRAIN_LEVELS)) if i != held])
-            errors += [bench_f16.nrmse_of(wrapped.predict(X[held]), y[held]),
-                       bench_f16.nrmse_of(wrapped.predict(train_sweeps[held].X[0]), train_sweeps[held].y[0])]
-        scores[alpha] = float(np.mean(errors))
-    return min(scores, key=scores.get), scores
+def held_out_splits(sweeps):
+    """``AboveBandRegressor``'s ``cv`` over ``map_signals``' training
+    signals of every level: each of HELD_OUT_LEVELS held out in turn, its
+    multisine and, with ``sweeps``, its sweep."""
+    n = len(bench_f16.TRAIN_LEVELS)
+    signals = np.arange(2 * n if sweeps else n)
+    splits = []
+    for held in (bench_f16.TRAIN_LEVELS.index(lv) for lv in HELD_OUT_LEVELS):
+        test = [held, held + n] if sweeps else [held]
+        splits.append((np.setdiff1d(signals, test), np.array(test)))
+    return splits
 
 
 def draw_rows(seed, start, start_s, X, y, train_sweeps, test):
@@ -116,18 +114,15 @@ def draw_rows(seed, start, start_s, X, y, train_sweeps, test):
                 "random_state": seed}
     rows, models = [bench_f16.entry(inside, settings, decoupled, test, fit_s)], {}
     for route, (params, sweeps, choose_alpha) in ROUTES.items():
-        def fit_map(alpha, levels):
-            chosen = {"alpha": alpha} if alpha is not None else {}
-            return AboveBandRegressor(FrozenEstimator(decoupled), cutoff=bench_f16.BAND_EDGES[1], fs=400.0,
-                                      **params, **chosen).fit(*map_signals(X, y, train_sweeps, levels, sweeps))
-
+        chosen = {"alpha": HINGE_ALPHAS, "cv": held_out_splits(sweeps)} if choose_alpha else {}
         t0 = time.perf_counter()
-        alpha, held_out = held_out_alpha(fit_map, X, y, train_sweeps) if choose_alpha else (None, {})
-        wrapped = fit_map(alpha, range(len(bench_f16.TRAIN_LEVELS)))
+        levels = range(len(bench_f16.TRAIN_LEVELS))
+        wrapped = AboveBandRegressor(FrozenEstimator(decoupled), cutoff=bench_f16.BAND_EDGES[1], fs=400.0,
+                                     **params, **chosen).fit(*map_signals(X, y, train_sweeps, levels, sweeps))
         map_s = time.perf_counter() - t0
+        held_out = dict(zip(HINGE_ALPHAS, wrapped.cv_nrmse_.tolist())) if choose_alpha else {}
         if held_out:
-            levels = " and ".join(map(str, HELD_OUT_LEVELS))
-            print(f"alpha chosen on held-out levels {levels}: {alpha} (mean NRMSE there: "
+            print(f"alpha chosen on held-out levels {' and '.join(map(str, HELD_OUT_LEVELS))}: {wrapped.alpha_} (mean NRMSE there: "
                   + ", ".join(f"{k}: {v:.4f}" for k, v in held_out.items()) + ")", flush=True)
         extra = {"n_params": int(decoupled.n_params_ + wrapped.n_map_params_),
                  "n_above_band_params": int(wrapped.n_map_params_), "map_fit_s": map_s,
@@ -136,7 +131,7 @@ def draw_rows(seed, start, start_s, X, y, train_sweeps, test):
         named = {k: list(v) if isinstance(v, tuple) else v for k, v in params.items()}
         rows.append(bench_f16.entry(f"AboveBandRegressor({inside}): {route}",
                                     {**settings, "route": route, "train_sweeps": sweeps, "cutoff_hz": wrapped.cutoff,
-                                     "n_taps": wrapped.n_taps, "alpha": wrapped.alpha, **named},
+                                     "n_taps": wrapped.n_taps, "alpha": wrapped.alpha_, **named},
                                     wrapped, test, fit_s + map_s, extra))
         models[route] = (wrapped, fit_s - start_s + map_s)
     return rows, models

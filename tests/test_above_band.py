@@ -9,8 +9,8 @@ from sklearn.base import BaseEstimator
 from sklearn.frozen import FrozenEstimator
 
 from sklearn_pnlss import AboveBandRegressor, BLAEstimator, IntegratedOutputRegressor
-from sklearn_pnlss.estimators._gated import (above_cutoff, apply_fir, fit_fir, hinges, integral_in_band, lagged,
-                                              relative_motions)
+from sklearn_pnlss.estimators._gated import (FirRidge, above_cutoff, apply_fir, fit_fir, hinges, integral_in_band,
+                                              lagged, relative_motions)
 from sklearn_pnlss.metrics import nrmse_by_band
 
 CUTOFF = 0.1  # cycles per sample
@@ -50,6 +50,25 @@ def test_the_filters_from_the_spectra_are_the_ridge_solution_of_the_delay_design
     fir = fit_fir(ws, rs, [periodic] * 3, 7, 1e-3)
     np.testing.assert_allclose(fir.reshape(-1, 2), expected, rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(apply_fir(ws[0], fir, periodic), designs[0] @ expected, atol=1e-12)
+
+
+@pytest.mark.parametrize("periodic", [True, False])
+def test_the_filters_of_a_subset_are_the_ridge_solution_of_its_own_designs(periodic):
+    # signals 0 and 2 share a length but not their subsets: each subset's normal equations are its signals' own
+    rng = np.random.default_rng(4)
+    lengths = (301, 123, 301, 301)
+    ws = [rng.standard_normal((n, 2)) for n in lengths]
+    rs = [rng.standard_normal((n, 1)) for n in lengths]
+    subsets = [[0, 1, 3], [1, 2, 3]]
+    ridge = FirRidge(ws, rs, [periodic] * 4, 5, subsets)
+    for k, subset in enumerate(subsets):
+        designs = [lagged(ws[i], 5, periodic).reshape(lengths[i], -1) for i in subset]
+        normal = sum(d.T @ d for d in designs)
+        for alpha in (1e-6, 0.3):
+            ridge_term = alpha * np.trace(normal) / normal.shape[0] * np.eye(10)
+            expected = np.linalg.solve(normal + ridge_term, sum(d.T @ rs[i] for d, i in zip(designs, subset)))
+            np.testing.assert_allclose(ridge.solve(alpha, k).reshape(-1, 1), expected, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(ridge.solve(0.3), fit_fir(ws, rs, [periodic] * 4, 5, 0.3), rtol=1e-12)
 
 
 @pytest.mark.slow
@@ -225,6 +244,36 @@ def test_hinges_past_a_clearance_recover_impacts_the_force_does_not_show():
     assert hinged.n_map_params_ == gated.gate_coef_.size + 7 * 16
 
 
+def test_the_penalty_is_chosen_by_how_the_filters_simulate_held_out_signals():
+    rng = np.random.default_rng(7)
+    records = [_contacts(rng) for _ in range(3)]
+    X, Y = np.stack([u for u, _ in records]), np.stack([y for _, y in records])
+    u_new, y_new = _contacts(rng)
+    alphas, splits = (1e-6, 1e-3, 1e-1, 10.0), [([0, 1], [2]), ([1, 2], [0])]
+    settings = dict(cutoff=CUTOFF, n_taps=16, clearances=(0.5, 1.0, 1.5), n_integrations=0)
+    model = AboveBandRegressor(BLAEstimator(2, fs=1.0), alpha=alphas, cv=splits, **settings).fit(X, Y)
+    # each score is that of filters fitted on the split's training signals alone (the rest fitted on all)
+    signals = [model._signal(U) for U in X]
+    inputs = [model._map_input(s) for s in signals]
+    errors = [above_cutoff(y - s.prediction, CUTOFF, 1.0) for s, y in zip(signals, Y)]
+    for alpha, score in zip(alphas, model.cv_nrmse_):
+        held_out = []
+        for train, (i,) in splits:
+            fir = fit_fir([inputs[j] for j in train], [errors[j] for j in train], [False] * 2, 16, alpha)
+            error = Y[i] - signals[i].prediction - apply_fir(inputs[i], fir, False)
+            held_out.append(np.sqrt(np.mean(error**2) / np.mean(Y[i] ** 2)))
+        assert score == pytest.approx(np.mean(held_out), rel=1e-9)
+    # a heavy penalty starves the filters of the impacts: held out it scores 2.8 times the chosen one's error,
+    # and the chosen one simulates a new record as well as the best of the candidates fitted on all
+    assert model.alpha_ == 1e-6 and model.cv_nrmse_[-1] > 2.5 * model.cv_nrmse_.min()
+    new_error = [float(nrmse_by_band(y_new, AboveBandRegressor(BLAEstimator(2, fs=1.0), alpha=a, **settings)
+                                     .fit(X, Y).predict(u_new), fs=1.0, edges=(0.0, 0.51))[0, 0]) for a in alphas]
+    assert float(nrmse_by_band(y_new, model.predict(u_new), fs=1.0, edges=(0.0, 0.51))[0, 0]) == pytest.approx(
+        min(new_error), rel=1e-6)
+    # by default each signal is held out in turn
+    assert AboveBandRegressor(BLAEstimator(2, fs=1.0), alpha=alphas, **settings).fit(X, Y).cv_nrmse_.shape == (4,)
+
+
 def test_bad_settings_are_refused_with_the_fix():
     u, y = _rattle(np.random.default_rng(4), n=1024)
     with pytest.raises(ValueError, match="cutoff: pass the highest frequency"):
@@ -239,6 +288,15 @@ def test_bad_settings_are_refused_with_the_fix():
         AboveBandRegressor(BLAEstimator(2, fs=1.0), cutoff=CUTOFF, clearances=(1.0,), hidden_units=4).fit(u, y)
     with pytest.raises(ValueError, match="clearances=.*non-negative numbers"):
         AboveBandRegressor(BLAEstimator(2, fs=1.0), cutoff=CUTOFF, clearances=(-1.0,)).fit(u, y)
+    with pytest.raises(ValueError, match="alpha=.*non-negative number"):
+        AboveBandRegressor(BLAEstimator(2, fs=1.0), cutoff=CUTOFF, alpha=[1e-3, -1.0]).fit(u, y)
+    with pytest.raises(ValueError, match="FIR filters only"):
+        AboveBandRegressor(BLAEstimator(2, fs=1.0), cutoff=CUTOFF, alpha=[1e-3, 1e-2], hidden_units=4).fit(u, y)
+    with pytest.raises(ValueError, match="holds training signals out, and there is one"):
+        AboveBandRegressor(BLAEstimator(2, fs=1.0), cutoff=CUTOFF, alpha=[1e-3, 1e-2]).fit(u, y)
+    two = np.stack([u[:512], u[512:]]), np.stack([y[:512], y[512:]])
+    with pytest.raises(ValueError, match=r"cv=.*every split must train on some of the 2 signals.*indices 0 to 1"):
+        AboveBandRegressor(BLAEstimator(2, fs=1.0), cutoff=CUTOFF, alpha=[1e-3, 1e-2], cv=[([0], [2])]).fit(*two)
     assert isinstance(AboveBandRegressor().get_params()["regressor"], (BaseEstimator, type(None)))
 
 

@@ -1315,7 +1315,7 @@ FIGURES = [
     Figure(R, "| the mean of two draws of `DecoupledPNLSSRegressor(18, n_branches=3, degree=5, "
               "branch_basis=\"signed_powers\", init=\"random\")`, each with the gated filters and the hinges past "
               "clearances above the band (`benchmarks/f16_clearances.py`; 44744 more coefficients, linear) | 252 | "
-              "0.143 | 553 s |", CLEARANCES,
+              "0.143 | 493 s |", CLEARANCES,
            lambda: [*(_clearances(0, None)["model"][k] for k in ("n_states", "n_branches", "degree")),
                     sum(_clearances(seed, HINGES)["n_above_band_params"] for seed in (0, 1)),
                     sum(_clearances(seed, None)["n_nonlinear_params"] for seed in (0, 1)),
@@ -1562,9 +1562,11 @@ FIGURES = [
                     _averaged(True)[4]["mean_nrmse_sweeps"]]),
     Figure(R, "`AboveBandRegressor(clearances=(0.5, 1.0, 1.5))`", CLEARANCES,
            lambda: _results("f16_clearances")["clearances"]),
-    Figure(R, "with the ridge chosen on held-out estimation levels 3 and 5 among 1e-3, 1e-2 and 1e-1 (`alpha=0.1` "
-              "on every draw", CLEARANCES,
+    Figure(R, "with the ridge chosen on held-out estimation levels 3 and 5 among 1e-3, 1e-2 and 1e-1 (`alpha=(1e-3, "
+              "1e-2, 1e-1)` and `cv` holding out each level's multisine and sweep; `alpha_=0.1` on every draw",
+           CLEARANCES,
            lambda: [*_results("f16_clearances")["held_out_levels"], *_results("f16_clearances")["hinge_alphas"],
+                    *_results("f16_clearances")["hinge_alphas"],
                     _one_figure([_clearances(seed, HINGES)["model"]["alpha"] for seed in (0, 1, 2)], 3)]),
     Figure(R, "they take the test multisines to 0.149 / 0.148 / 0.156, against 0.151 / 0.151 / 0.160 with the gated "
               "filters fitted on the multisines alone and 0.156 / 0.156 / 0.163 with them fitted on both waveforms, "
@@ -1577,12 +1579,12 @@ FIGURES = [
            lambda: [2 if _clearances(0, HINGES)["nrmse"]["2"] == pytest.approx(
                         _clearances(0, GATED_FILTERS)["nrmse"]["2"], abs=5e-4) else math.nan,
                     6, *_clearances(0, HINGES)["nrmse"]["6"], *_clearances(0, GATED_FILTERS)["nrmse"]["6"]]),
-    Figure(R, "They cost 22372 coefficients and 84 s of fitting on the first draw, for seven fits of the filters "
+    Figure(R, "They cost 22372 coefficients and 41 s of fitting on the first draw, for seven solves of the filters "
               "(six held out)", CLEARANCES,
            lambda: [_clearances(0, HINGES)["n_above_band_params"], _clearances(0, HINGES)["map_fit_s"]]),
     Figure(R, "The mean of the first two draws' models reaches 0.143 on the test multisines and 0.211 on the sweeps, "
-              "in 553 s of fitting (level 6: 0.122 / 0.102 / 0.283, the drive point below the deep LRU's 0.134, the "
-              "wing and the payload above its 0.099 and 0.237); of all three, 0.144 and 0.202 in 791 s", CLEARANCES,
+              "in 493 s of fitting (level 6: 0.122 / 0.102 / 0.283, the drive point below the deep LRU's 0.134, the "
+              "wing and the payload above its 0.099 and 0.237); of all three, 0.144 and 0.202 in 693 s", CLEARANCES,
            lambda: [_clearances_mean(2, HINGES)["mean_nrmse"], _clearances_mean(2, HINGES)["mean_nrmse_sweeps"],
                     _clearances_mean(2, HINGES)["fit_s"], 6, *_clearances_mean(2, HINGES)["nrmse"]["6"],
                     *next(v["level 6"] for v in _results("f16_clearances")["published"].values() if "level 6" in v),

@@ -15,7 +15,7 @@ from scipy import linalg
 
 from ..utils.threads import symmetric_threads_for
 
-__all__ = ["above_cutoff", "apply_fir", "envelope", "fit_fir", "fit_gate", "gate", "hinges", "integral_in_band",
+__all__ = ["FirRidge", "above_cutoff", "apply_fir", "envelope", "fit_fir", "fit_gate", "gate", "hinges", "integral_in_band",
            "lagged", "relative_motions"]
 
 # Rows of the gate's features held at once (8192 x 172 for 18 states: 11 MB).
@@ -166,44 +166,68 @@ def _subtract_past_end(blocks, tails):
         blocks[:, a, :, :] -= running
 
 
-def fit_fir(gated, errors, periodic, n_taps, alpha):
-    """FIR filters (n_inputs, n_taps, n_outputs) by ridge regression of each
-    signal's error on its gated input and the input's delays; ``alpha``
-    relative to the normal matrix's mean diagonal.
+class FirRidge:
+    """The ridge regression of FIR filters (n_inputs, n_taps, n_outputs) of
+    each signal's error on its gated input's delays, over all the signals
+    or any of the ``subsets`` named at construction (cross-validation), at
+    any penalty: ``alpha`` relative to the normal matrix's mean diagonal.
 
     The normal matrix is built from the channels' correlations in
     ``O(n_channels^2 n log n)``, never from the design matrix's ``O(n
-    (n_channels n_taps)^2)``: summed over the signals (as spectra, for
-    records of one length: one inverse transform for all of them), laid
-    out block-Toeplitz once, less the products past each record's end."""
-    m, k = gated[0].shape[1], errors[0].shape[1]
-    by_length = {}
-    for w, r, p in zip(gated, errors, periodic):
-        W, n = _spectra(w, n_taps, p)
-        by_length.setdefault(n, []).append((W, sfft.rfft(r, n, axis=0, workers=-1)))
-    corr, rhs = 0.0, 0.0
-    for n, signals in by_length.items():
-        c, x = _correlations(signals, n, n_taps)
-        corr, rhs = corr + c, rhs + x
-    # from rest, the records' last n_taps - 1 samples read backwards: the correlations hold their products past
-    # the record's end, the delay design does not
-    tails = [w[::-1][:n_taps - 1] for w, p in zip(gated, periodic) if not p]
-    # block (i, j) at (a, b) is corr[i, j] at a - b: the windows of the delays read backwards
-    windows = sliding_window_view(corr[:, :, ::-1], n_taps, axis=2)[:, :, ::-1]  # (i, j, a, b)
-    normal = np.empty((m * n_taps, m * n_taps))
-    blocks = normal.reshape(m, n_taps, m, n_taps)
-    blocks[...] = windows.transpose(0, 2, 1, 3)
-    if tails:
-        _subtract_past_end(blocks, np.stack(tails))
-    rhs = rhs.reshape(m * n_taps, k)
-    scale = np.trace(normal) / normal.shape[0]
-    if scale <= 0:  # nothing gated through: nothing to fit
-        coef = np.zeros_like(rhs)
-    else:
-        normal[np.diag_indices(normal.shape[0])] += alpha * scale
-        with symmetric_threads_for(normal.shape[0]):
-            coef = linalg.solve(normal, rhs, assume_a="pos", overwrite_a=True, check_finite=False)
-    return coef.reshape(m, n_taps, k)
+    (n_channels n_taps)^2)``: summed over the signals (as spectra: the
+    signals of one transform length that every subset takes or leaves
+    alike share one inverse transform), laid out block-Toeplitz, less the
+    products past each record's end. The correlations are computed once;
+    each fit of a subset or a penalty is one sum of them and one Cholesky
+    solve."""
+
+    def __init__(self, gated, errors, periodic, n_taps, subsets=()):
+        self.n_taps = n_taps
+        self.n_inputs, self.n_outputs = gated[0].shape[1], errors[0].shape[1]
+        # a signal's membership: in which subsets it is
+        membership = [tuple(i in set(subset) for subset in subsets) for i in range(len(gated))]
+        by_key = {}
+        for w, r, p, member in zip(gated, errors, periodic, membership):
+            W, n = _spectra(w, n_taps, p)
+            by_key.setdefault((n, member), []).append((W, sfft.rfft(r, n, axis=0, workers=-1)))
+        self._parts = [(member, *_correlations(signals, n, n_taps)) for (n, member), signals in by_key.items()]
+        # from rest, the records' last n_taps - 1 samples read backwards: the correlations hold their products
+        # past the record's end, the delay design does not
+        self._tails = [(member, w[::-1][:n_taps - 1]) for w, p, member in zip(gated, periodic, membership) if not p]
+
+    def solve(self, alpha, subset=None):
+        """The filters fitted on every signal, or on subset number
+        ``subset`` of those named at construction."""
+        def taken(member):
+            return subset is None or member[subset]
+
+        m, n_taps = self.n_inputs, self.n_taps
+        corr = sum(c for member, c, _ in self._parts if taken(member))
+        rhs = sum(x for member, _, x in self._parts if taken(member))
+        tails = [tail for member, tail in self._tails if taken(member)]
+        # block (i, j) at (a, b) is corr[i, j] at a - b: the windows of the delays read backwards
+        windows = sliding_window_view(corr[:, :, ::-1], n_taps, axis=2)[:, :, ::-1]  # (i, j, a, b)
+        normal = np.empty((m * n_taps, m * n_taps))
+        blocks = normal.reshape(m, n_taps, m, n_taps)
+        blocks[...] = windows.transpose(0, 2, 1, 3)
+        if tails:
+            _subtract_past_end(blocks, np.stack(tails))
+        rhs = rhs.reshape(m * n_taps, self.n_outputs)
+        scale = np.trace(normal) / normal.shape[0]
+        if scale <= 0:  # nothing gated through: nothing to fit
+            coef = np.zeros_like(rhs)
+        else:
+            normal[np.diag_indices(normal.shape[0])] += alpha * scale
+            with symmetric_threads_for(normal.shape[0]):
+                coef = linalg.solve(normal, rhs, assume_a="pos", overwrite_a=True, check_finite=False)
+        return coef.reshape(m, n_taps, self.n_outputs)
+
+
+def fit_fir(gated, errors, periodic, n_taps, alpha):
+    """FIR filters (n_inputs, n_taps, n_outputs) by ridge regression of each
+    signal's error on its gated input's delays, over all the signals (see
+    :class:`FirRidge`)."""
+    return FirRidge(gated, errors, periodic, n_taps).solve(alpha)
 
 
 def apply_fir(w, fir, periodic):

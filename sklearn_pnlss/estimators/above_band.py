@@ -44,12 +44,13 @@ from typing import NamedTuple
 
 import numpy as np
 from sklearn.base import BaseEstimator, clone
+from sklearn.model_selection import BaseCrossValidator, BaseShuffleSplit, LeaveOneOut, check_cv
 from sklearn.utils.validation import check_is_fitted
 
 from ..utils.parameters import Interval, validates_parameters
 from ..utils.validation import restore_layout, signal_layout, validate_signals
 from ._base import DynamicRegressorMixin
-from ._gated import (above_cutoff, apply_fir, envelope, fit_fir, fit_gate, gate, hinges, integral_in_band,
+from ._gated import (FirRidge, above_cutoff, apply_fir, envelope, fit_gate, gate, hinges, integral_in_band,
                      relative_motions)
 from ._window_network import apply_networks, fit_networks, held_out_rows, windows
 from .bla import BLAEstimator
@@ -128,10 +129,24 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         map of the whole measured record rather than a simulator: the
         prediction at t uses the input up to ``n_lead`` samples after t.
         Below ``n_taps``.
-    alpha : float, default=1e-4
+    alpha : float or array-like of float, default=1e-4
         Ridge penalty of the FIR fit, relative to the mean diagonal of its
         normal matrix; with ``hidden_units``, the network's L2 penalty on its
-        weights (in units of its standardised inputs and outputs).
+        weights (in units of its standardised inputs and outputs). Several
+        values (FIR filters only): the one whose filters, fitted without
+        them, simulate the held-out training signals of ``cv`` best is kept
+        (``alpha_``). The regressor, the gate and the hinges' scales are
+        fitted once on every signal; only the filters are held out, from
+        correlations computed once: each candidate and split costs one
+        Cholesky solve.
+    cv : int, splitter, list of (train, test) or None, default=None
+        With several ``alpha``: how the training signals are held out.
+        None: each signal in turn; an int ``k``: ``k`` contiguous groups of
+        signals (:class:`~sklearn.model_selection.KFold`); a splitter
+        without groups, or a list of ``(train, test)`` arrays of signal
+        indices (hold out what a new test will be: another level, another
+        waveform).
+        Whole signals are split, never samples within one.
     clearances : tuple of float or None, default=None
         With the FIR filters: the contacts that open past a clearance, as
         more inputs of the filters beside the gated input. The outputs'
@@ -196,6 +211,13 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
     ----------
     regressor_ : estimator
         The fitted state-space model.
+    alpha_ : float
+        The ridge penalty the filters or the network are fitted with:
+        ``alpha``, or with several the one ``cv`` chose.
+    cv_nrmse_ : ndarray of shape (n_alphas,)
+        With several ``alpha``: the NRMSE of the whole simulation (the
+        regressor's and the map's) of the held-out signals, averaged over
+        the outputs, the signals and the splits, for each ``alpha``.
     state_scale_ : ndarray of shape (n_states,)
         The rms of each state on the training signals (the gate's units).
     gate_coef_ : ndarray of shape (1 + n_states * (n_states + 1) // 2,)
@@ -276,7 +298,8 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         "fs": [Interval(Real, 0, None, closed="neither")],
         "n_taps": [Interval(Integral, 1, None, closed="left")],
         "n_lead": [Interval(Integral, 0, None, closed="left")],
-        "alpha": [Interval(Real, 0, None, closed="left")],
+        "alpha": [Interval(Real, 0, None, closed="left"), "array-like"],
+        "cv": [Interval(Integral, 2, None, closed="left"), "array-like", BaseCrossValidator, BaseShuffleSplit, None],
         "clearances": ["array-like", None],
         "n_integrations": [Interval(Integral, 0, None, closed="left")],
         "hidden_units": [Interval(Integral, 1, None, closed="left"), None],
@@ -287,7 +310,7 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         "random_state": ["random_state"],
     }
 
-    def __init__(self, regressor=None, *, cutoff=None, fs=1.0, n_taps=200, n_lead=0, alpha=1e-4,
+    def __init__(self, regressor=None, *, cutoff=None, fs=1.0, n_taps=200, n_lead=0, alpha=1e-4, cv=None,
                  clearances=None, n_integrations=1, hidden_units=None, in_band=False, window_stride=2, n_networks=1,
                  n_jobs=None, random_state=None):
         self.regressor = regressor
@@ -296,6 +319,7 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         self.n_taps = n_taps
         self.n_lead = n_lead
         self.alpha = alpha
+        self.cv = cv
         self.clearances = clearances
         self.n_integrations = n_integrations
         self.hidden_units = hidden_units
@@ -344,7 +368,15 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
                     or np.any(clearances < 0):
                 raise ValueError(f"clearances={self.clearances!r}: pass a tuple of non-negative numbers (in units "
                                  "of each motion's largest training rms), e.g. (0.5, 1.0, 1.5), or None.")
+        alphas = np.atleast_1d(np.asarray(self.alpha, dtype=float))
+        if alphas.ndim != 1 or alphas.size == 0 or not np.all(np.isfinite(alphas)) or np.any(alphas < 0):
+            raise ValueError(f"alpha={self.alpha!r}: pass a non-negative number, or several (a 1-D array-like) to "
+                             "choose among by held-out signals (cv).")
+        if alphas.size > 1 and self.hidden_units is not None:
+            raise ValueError(f"alpha={self.alpha!r}: several penalties are chosen among for the FIR filters only; "
+                             "pass one alpha with hidden_units.")
         X_list, y_list, _ = validate_signals(self, X, y, reset=True)
+        splits = self._splits(len(X_list)) if alphas.size > 1 else []
         self.regressor_ = clone(self.regressor) if self.regressor is not None else BLAEstimator()
         self.regressor_.fit(X, y, **fit_params)
         self.n_outputs_ = y_list[0].shape[1]
@@ -373,8 +405,18 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
             inputs = [self._map_input(s, g, self.hinge_scale_ * h) for s, g, h in zip(signals, gated, kinks)]
         else:
             inputs = [self._map_input(s) for s in signals]
+        self.alpha_ = float(alphas[0])
         if self.hidden_units is None:
-            self.fir_ = fit_fir(inputs, residual, [s.periodic for s in signals], self.n_taps, self.alpha)
+            ridge = FirRidge(inputs, residual, [s.periodic for s in signals], self.n_taps,
+                             [train for train, _ in splits])
+            if splits:
+                self.cv_nrmse_ = np.array([
+                    np.mean([self._held_out_nrmse(ridge.solve(alpha, k), [signals[i] for i in test],
+                                                  [inputs[i] for i in test], [y_list[i] for i in test])
+                             for k, (_, test) in enumerate(splits)])
+                    for alpha in alphas])
+                self.alpha_ = float(alphas[np.argmin(self.cv_nrmse_)])
+            self.fir_ = ridge.solve(self.alpha_)
             self.n_map_params_ = self.gate_coef_.size + self.fir_.size
         else:
             # each signal relative to its own output power, as the NRMSE scores it (the outputs in units of the
@@ -385,13 +427,36 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
                 before_power = np.maximum(np.mean(np.vstack(residual) ** 2, axis=0), np.finfo(float).tiny)
             self.networks_, self.network_input_scale_, self.network_output_scale_ = fit_networks(
                 inputs, residual, weights, [held_out_rows(len(s.prediction), s.period) for s in signals],
-                self.hidden_units, self.alpha, self.n_networks, self.random_state, self.n_jobs)
+                self.hidden_units, self.alpha_, self.n_networks, self.random_state, self.n_jobs)
             self.n_map_params_ = self.gate_coef_.size + sum(
                 w.size for network in self.networks_ for w in network.coefs_ + network.intercepts_)
         self.n_params_ = _state_space_step(self.regressor_).n_params_ + self.n_map_params_
         after = [r - self._apply_map(i, s.periodic) for s, i, r in zip(signals, inputs, residual)]
         self.explained_fraction_ = 1.0 - np.mean(np.vstack(after) ** 2, axis=0) / before_power
         return self
+
+    def _splits(self, n_signals):
+        """``(train, test)`` signal indices of each split of ``cv``."""
+        if self.cv is None:
+            if n_signals < 2:
+                raise ValueError(f"alpha={self.alpha!r}: choosing among several penalties holds training signals "
+                                 "out, and there is one. Pass several signals, or one alpha.")
+            cv = LeaveOneOut()
+        else:
+            cv = check_cv(self.cv)
+        splits = [(np.asarray(train), np.asarray(test)) for train, test in cv.split(np.arange(n_signals))]
+        if not splits or any(train.size == 0 or test.size == 0 or min(train.min(), test.min()) < 0
+                             or max(train.max(), test.max()) >= n_signals for train, test in splits):
+            raise ValueError(f"cv={self.cv!r}: every split must train on some of the {n_signals} signals and hold "
+                             f"out others, by their indices 0 to {n_signals - 1}.")
+        return splits
+
+    def _held_out_nrmse(self, fir, signals, inputs, y_list):
+        """The NRMSE of the regressor's and ``fir``'s simulation of held-out
+        signals, averaged over them and their outputs."""
+        return np.mean([np.sqrt(np.mean((Y - s.prediction - apply_fir(i, fir, s.periodic)) ** 2, axis=0)
+                                / np.mean(Y**2, axis=0))
+                        for s, i, Y in zip(signals, inputs, y_list)])
 
     def _signal(self, U):
         """One input signal as the model sees it (see ``_Signal``)."""
