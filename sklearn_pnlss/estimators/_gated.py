@@ -15,8 +15,8 @@ from scipy import linalg
 
 from ..utils.threads import symmetric_threads_for
 
-__all__ = ["FirRidge", "above_cutoff", "apply_fir", "envelope", "fit_fir", "fit_gate", "gate", "hinges", "integral_in_band",
-           "lagged", "relative_motions"]
+__all__ = ["FirRidge", "above_cutoff", "apply_fir", "envelope", "fit_fir", "fit_gate", "gate", "hinges",
+           "integral_in_band", "lagged", "relative_motions"]
 
 # Rows of the gate's features held at once (8192 x 172 for 18 states: 11 MB).
 ROWS_PER_BLOCK = 8192
@@ -185,7 +185,8 @@ class FirRidge:
         self.n_taps = n_taps
         self.n_inputs, self.n_outputs = gated[0].shape[1], errors[0].shape[1]
         # a signal's membership: in which subsets it is
-        membership = [tuple(i in set(subset) for subset in subsets) for i in range(len(gated))]
+        subsets = [set(subset) for subset in subsets]
+        membership = [tuple(i in subset for subset in subsets) for i in range(len(gated))]
         by_key = {}
         for w, r, p, member in zip(gated, errors, periodic, membership):
             W, n = _spectra(w, n_taps, p)
@@ -193,7 +194,8 @@ class FirRidge:
         self._parts = [(member, *_correlations(signals, n, n_taps)) for (n, member), signals in by_key.items()]
         # from rest, the records' last n_taps - 1 samples read backwards: the correlations hold their products
         # past the record's end, the delay design does not
-        self._tails = [(member, w[::-1][:n_taps - 1]) for w, p, member in zip(gated, periodic, membership) if not p]
+        self._tails = [(member, w[::-1][:n_taps - 1].copy())
+                       for w, p, member in zip(gated, periodic, membership) if not p]
 
     def solve(self, alpha, subset=None):
         """The filters fitted on every signal, or on subset number
