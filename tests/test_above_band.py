@@ -7,6 +7,7 @@ import pytest
 from scipy.signal import lfilter
 from sklearn.base import BaseEstimator
 from sklearn.frozen import FrozenEstimator
+from sklearn.model_selection import KFold
 
 from sklearn_pnlss import AboveBandRegressor, BLAEstimator, IntegratedOutputRegressor
 from sklearn_pnlss.estimators._gated import (FirRidge, above_cutoff, apply_fir, fit_fir, hinges, integral_in_band,
@@ -270,8 +271,11 @@ def test_the_penalty_is_chosen_by_how_the_filters_simulate_held_out_signals():
                                      .fit(X, Y).predict(u_new), fs=1.0, edges=(0.0, 0.51))[0, 0]) for a in alphas]
     assert float(nrmse_by_band(y_new, model.predict(u_new), fs=1.0, edges=(0.0, 0.51))[0, 0]) == pytest.approx(
         min(new_error), rel=1e-6)
-    # by default each signal is held out in turn
-    assert AboveBandRegressor(BLAEstimator(2, fs=1.0), alpha=alphas, **settings).fit(X, Y).cv_nrmse_.shape == (4,)
+    # by default each signal is held out in turn, as three folds of three signals do; an int is so many folds
+    each = AboveBandRegressor(BLAEstimator(2, fs=1.0), alpha=alphas, **settings).fit(X, Y).cv_nrmse_
+    folds = AboveBandRegressor(BLAEstimator(2, fs=1.0), alpha=alphas, cv=KFold(3), **settings).fit(X, Y).cv_nrmse_
+    np.testing.assert_allclose(each, folds, rtol=1e-12)
+    assert AboveBandRegressor(BLAEstimator(2, fs=1.0), alpha=alphas, cv=3, **settings).fit(X, Y).alpha_ == 1e-6
 
 
 def test_bad_settings_are_refused_with_the_fix():
