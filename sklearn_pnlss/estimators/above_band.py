@@ -290,6 +290,10 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
     ...     return float(nrmse_by_band(y_new, m.predict(u_new), fs=1.0, edges=(0.1, 0.51))[0, 0])
     >>> round(error_above(alone), 4), round(error_above(model), 4)
     (0.011, 0.008)
+    >>> u_2, y_2 = record()  # with a second record, the ridge chosen holding each out in turn
+    >>> chosen = AboveBandRegressor(BLAEstimator(2, fs=1.0), cutoff=0.1, n_taps=8, alpha=(1e-4, 1e-1, 10.0))
+    >>> chosen.fit([u, u_2], [y, y_2]).alpha_, chosen.cv_nrmse_.round(4).tolist()
+    (0.0001, [0.0099, 0.01, 0.0134])
     """
 
     _parameter_constraints = {
