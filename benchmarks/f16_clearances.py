@@ -32,7 +32,7 @@ where the joint does not knock); the other draws are the check.
 
 Each row holds the test multisines' NRMSE (periodic steady state), the
 test levels' sine sweeps (from rest, a waveform the model's own fit never
-saw), the fit time (the model's plus the map's, the held-out fits
+saw), the fit time (the model's plus the map's, the held-out solves
 included) and the parameter counts. Then, for each route, the mean of the
 first two and of all three draws' models (``AveragedRegressor``'s
 prediction; its fit time the BLA's plus each member's). Writes
@@ -116,13 +116,14 @@ def draw_rows(seed, start, start_s, X, y, train_sweeps, test):
     for route, (params, sweeps, choose_alpha) in ROUTES.items():
         chosen = {"alpha": HINGE_ALPHAS, "cv": held_out_splits(sweeps)} if choose_alpha else {}
         t0 = time.perf_counter()
-        levels = range(len(bench_f16.TRAIN_LEVELS))
+        every_level = range(len(bench_f16.TRAIN_LEVELS))
         wrapped = AboveBandRegressor(FrozenEstimator(decoupled), cutoff=bench_f16.BAND_EDGES[1], fs=400.0,
-                                     **params, **chosen).fit(*map_signals(X, y, train_sweeps, levels, sweeps))
+                                     **params, **chosen).fit(*map_signals(X, y, train_sweeps, every_level, sweeps))
         map_s = time.perf_counter() - t0
         held_out = dict(zip(HINGE_ALPHAS, wrapped.cv_nrmse_.tolist())) if choose_alpha else {}
         if held_out:
-            print(f"alpha chosen on held-out levels {' and '.join(map(str, HELD_OUT_LEVELS))}: {wrapped.alpha_} (mean NRMSE there: "
+            levels = " and ".join(map(str, HELD_OUT_LEVELS))
+            print(f"alpha chosen on held-out levels {levels}: {wrapped.alpha_} (mean NRMSE there: "
                   + ", ".join(f"{k}: {v:.4f}" for k, v in held_out.items()) + ")", flush=True)
         extra = {"n_params": int(decoupled.n_params_ + wrapped.n_map_params_),
                  "n_above_band_params": int(wrapped.n_map_params_), "map_fit_s": map_s,
