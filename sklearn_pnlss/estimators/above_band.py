@@ -217,7 +217,8 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
     cv_nrmse_ : ndarray of shape (n_alphas,)
         With several ``alpha``: the NRMSE of the whole simulation (the
         regressor's and the map's) of the held-out signals, averaged over
-        the outputs, the signals and the splits, for each ``alpha``.
+        the outputs and each split's held-out signals, then over the
+        splits, for each ``alpha``.
     state_scale_ : ndarray of shape (n_states,)
         The rms of each state on the training signals (the gate's units).
     gate_coef_ : ndarray of shape (1 + n_states * (n_states + 1) // 2,)
