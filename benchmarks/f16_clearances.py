@@ -77,17 +77,17 @@ class MeanOfMembers:
         return np.mean([m.predict(X) for m in self.estimators_], axis=0)
 
 
-def map_signals(X, y, train_sweeps, levels, sweeps):
-    """The training levels ``levels`` (indices) as the map sees them: their
-    multisines, and their sine sweeps with ``sweeps``."""
-    X_map = [X[i] for i in levels] + ([train_sweeps[i].X[0] for i in levels] if sweeps else [])
-    y_map = [y[i] for i in levels] + ([train_sweeps[i].y[0] for i in levels] if sweeps else [])
+def map_signals(X, y, train_sweeps, sweeps):
+    """The training levels as the map sees them: their multisines, then
+    their sine sweeps with ``sweeps``."""
+    X_map = list(X) + ([d.X[0] for d in train_sweeps] if sweeps else [])
+    y_map = list(y) + ([d.y[0] for d in train_sweeps] if sweeps else [])
     return X_map, y_map
 
 
 def held_out_splits(sweeps):
     """``AboveBandRegressor``'s ``cv`` over ``map_signals``' training
-    signals of every level: each of HELD_OUT_LEVELS held out in turn, its
+    signals: each of HELD_OUT_LEVELS held out in turn, its
     multisine and, with ``sweeps``, its sweep."""
     n = len(bench_f16.TRAIN_LEVELS)
     signals = np.arange(2 * n if sweeps else n)
@@ -116,9 +116,8 @@ def draw_rows(seed, start, start_s, X, y, train_sweeps, test):
     for route, (params, sweeps, choose_alpha) in ROUTES.items():
         chosen = {"alpha": HINGE_ALPHAS, "cv": held_out_splits(sweeps)} if choose_alpha else {}
         t0 = time.perf_counter()
-        every_level = range(len(bench_f16.TRAIN_LEVELS))
         wrapped = AboveBandRegressor(FrozenEstimator(decoupled), cutoff=bench_f16.BAND_EDGES[1], fs=400.0,
-                                     **params, **chosen).fit(*map_signals(X, y, train_sweeps, every_level, sweeps))
+                                     **params, **chosen).fit(*map_signals(X, y, train_sweeps, sweeps))
         map_s = time.perf_counter() - t0
         held_out = dict(zip(HINGE_ALPHAS, wrapped.cv_nrmse_.tolist())) if choose_alpha else {}
         if held_out:
