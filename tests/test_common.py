@@ -46,6 +46,8 @@ def all_estimators():
 FAST_SETTINGS = {
     "PNLSSRegressor": {"max_iter": 2},
     "AboveBandRegressor": {"cutoff": 0.25, "n_taps": 4},
+    "LRUAboveBandRegressor": {"cutoff": 0.25, "width": 2, "n_layers": 1, "n_modes": 2, "max_iter": 2,
+                              "segment_length": 16, "burn_in": 0},
     "AveragedRegressor": {"regressor": PNLSSRegressor(max_iter=2), "n_estimators": 2},
     "DecoupledPNLSSRegressor": {
         "n_branches": 1, "degree": 3, "n_init": 1, "n_points": 50, "max_iter": 2,

@@ -449,6 +449,13 @@ def _clearances_mean(k, route):
                 if r["model"]["route"] == route and len(r["model"]["draws"]) == k)
 
 
+def _lru(seed, network=True):
+    """f16_lru.py: one draw's row, with the network above the band or the
+    model alone."""
+    rows = next(d["rows"] for d in _results("f16_lru")["draws"] if d["random_state"] == seed)
+    return next(r for r in rows if r["model"]["estimator"].startswith("LRUAboveBandRegressor") == network)
+
+
 def _one_figure(values, decimals):
     """``values`` if they all round to one figure at ``decimals`` places
     (a claim about several rows), else NaN (no quote matches it)."""
@@ -708,6 +715,7 @@ LEVEL_MODES_MODEL = "f16_level_modes.py --model: f16_level_modes.json"
 BUDGET = "f16_error_budget.py --also-stable-at-rest: f16_error_budget.json"
 AVERAGED = "f16_averaged.py: f16_averaged.json"
 CLEARANCES = "f16_clearances.py: f16_clearances.json"
+LRU = "f16_lru.py: f16_lru.json"
 GATED_FILTERS, GATED_SWEEPS, HINGES = ("gated filters", "gated filters, with the sweeps",
                                        "gated filters and hinges, with the sweeps")
 NOISE_TEST = "tests/test_pnlss_fitting.py::test_noise_weighting_weighs_each_level_by_its_own_noise"

@@ -7,6 +7,7 @@ from .averaged import AveragedRegressor
 from .bla import BLAEstimator
 from .decoupled import DecoupledPNLSSRegressor
 from .integrated import IntegratedOutputRegressor
+from .lru_above_band import LRUAboveBandRegressor
 from .pnlss import PNLSSRegressor
 
-__all__ = ["AboveBandRegressor", "AveragedRegressor", "BLAEstimator", "DecoupledPNLSSRegressor", "IntegratedOutputRegressor", "PNLSSRegressor"]
+__all__ = ["AboveBandRegressor", "AveragedRegressor", "BLAEstimator", "DecoupledPNLSSRegressor", "IntegratedOutputRegressor", "LRUAboveBandRegressor", "PNLSSRegressor"]

@@ -1,0 +1,336 @@
+"""A deep network of linear recurrent units (LRU: Orvieto et al., ICML
+2023), fitted by Adam with exact gradients, in numpy: the learned map of
+:class:`~sklearn_pnlss.LRUAboveBandRegressor`.
+
+Each layer normalises its input, passes it through ``n_modes`` complex
+first-order recursions ``s(t) = lam s(t - 1) + B v(t)`` (stable by
+construction: ``|lam| = exp(-exp(nu)) < 1``), reads them out as ``Re(C s)
++ D v``, applies a GELU and a linear mixing, and adds the result to its
+input. The recursions are diagonal, so a compiled loop over the samples
+costs ``n_modes`` complex products a sample, next to the ``2 n_modes
+width`` of the products with ``B`` and ``C``; forward from rest, or in
+periodic steady state over one period (the response from rest plus the
+free response of the state that the period's end carries into its start,
+in closed form), and backward by the adjoint recursion, likewise.
+
+For a complex quantity ``z`` the gradient kept is ``dL/dRe(z) + i
+dL/dIm(z)``, so that ``dL = Re(sum conj(grad) dz)``. Internal: may change
+without notice.
+"""
+import math
+
+import numpy as np
+from numba import njit, prange
+
+__all__ = ["LRUNetwork", "fit_network", "one_cycle"]
+
+# modes a loop carries side by side: independent chains of products the processor overlaps
+_CHAINS = 8
+
+
+@njit(parallel=True, cache=True, fastmath=True)
+def _recurse(b_re, b_im, lam, periodic, adjoint):
+    """The recursions ``x[n, k, t] = lam[n] x[n, k, t - 1] + b[n, k, t]``
+    along the last axis of ``b = b_re + i b_im`` (n_modes, n_sequences,
+    n_samples): from rest, or (``periodic``) in periodic steady state over
+    each sequence (``x[n, k, -1] = x[n, k, T - 1]``: the response from rest
+    plus ``lam^(t + 1) x[n, k, -1]``, with ``x[n, k, -1] = x0[n, k, T - 1] /
+    (1 - lam^T)``). With ``adjoint``, the adjoint recursion backwards in
+    time, ``g[t] = b[t] + conj(lam) g[t + 1]``, likewise. Returns the real
+    and imaginary parts."""
+    n_modes, n_seq, n_samples = b_re.shape
+    x_re, x_im = np.empty_like(b_re), np.empty_like(b_im)
+    n_groups = (n_modes + _CHAINS - 1) // _CHAINS
+    for job in prange(n_groups * n_seq):
+        group, k = job // n_seq, job % n_seq
+        first = group * _CHAINS
+        width = min(_CHAINS, n_modes - first)
+        l_re, l_im = np.zeros(_CHAINS), np.zeros(_CHAINS)
+        for c in range(width):
+            lam_n = np.conj(lam[first + c]) if adjoint else lam[first + c]
+            l_re[c], l_im[c] = lam_n.real, lam_n.imag
+        s_re, s_im = np.zeros(_CHAINS), np.zeros(_CHAINS)
+        for i in range(n_samples):
+            t = n_samples - 1 - i if adjoint else i
+            for c in range(width):
+                r = l_re[c] * s_re[c] - l_im[c] * s_im[c] + b_re[first + c, k, t]
+                s_im[c] = l_re[c] * s_im[c] + l_im[c] * s_re[c] + b_im[first + c, k, t]
+                s_re[c] = r
+                x_re[first + c, k, t], x_im[first + c, k, t] = r, s_im[c]
+        if periodic:
+            # what enters before the first sample is the state after the last, in steady state
+            for c in range(width):
+                lam_n = l_re[c] + 1j * l_im[c]
+                carried = lam_n * (s_re[c] + 1j * s_im[c]) / (1.0 - lam_n**n_samples)
+                for i in range(n_samples):
+                    t = n_samples - 1 - i if adjoint else i
+                    x_re[first + c, k, t] += carried.real
+                    x_im[first + c, k, t] += carried.imag
+                    carried *= lam_n
+    return x_re, x_im
+
+
+@njit(parallel=True, cache=True, fastmath=True)
+def _gelu(x):
+    """GELU ``x Phi(x)`` of each element and its derivative ``Phi(x) + x
+    phi(x)``."""
+    flat = x.ravel()
+    out, slope = np.empty_like(flat), np.empty_like(flat)
+    for i in prange(flat.size):
+        v = flat[i]
+        cdf = 0.5 * (1.0 + math.erf(v * 0.7071067811865476))
+        out[i] = v * cdf
+        slope[i] = cdf + v * math.exp(-0.5 * v * v) * 0.3989422804014327
+    return out.reshape(x.shape), slope.reshape(x.shape)
+
+
+@njit(parallel=True, cache=True, fastmath=True)
+def _pole_gradient(s_re, s_im, g_re, g_im, periodic):
+    """``sum_k,t conj(s[n, k, t - 1]) g[n, k, t]`` for each mode ``n``: the
+    gradient of ``lam`` from the states ``s`` and the adjoint states ``g``
+    (``s[n, k, -1]``: the last state in steady state, 0 from rest)."""
+    n_modes, n_seq, n_samples = s_re.shape
+    out = np.zeros(n_modes, dtype=np.complex128)
+    for n in prange(n_modes):
+        total = 0.0j
+        for k in range(n_seq):
+            if periodic:
+                total += (s_re[n, k, -1] - 1j * s_im[n, k, -1]) * (g_re[n, k, 0] + 1j * g_im[n, k, 0])
+            for t in range(1, n_samples):
+                total += (s_re[n, k, t - 1] - 1j * s_im[n, k, t - 1]) * (g_re[n, k, t] + 1j * g_im[n, k, t])
+        out[n] = total
+    return out
+
+
+class LRUNetwork:
+    """``n_layers`` residual LRU layers of width ``width`` between a linear
+    encoder of ``n_inputs`` channels and a linear decoder to ``n_outputs``.
+
+    ``params`` is a dict of arrays (complex ones for ``B`` and ``C``);
+    :meth:`backward` returns the gradients in the same layout. A batch of
+    sequences of one length, all periodic or all from rest, goes through
+    at once (``x`` of shape (n_sequences, n_samples, n_inputs)): the
+    products with the weights as one product each, the recursions of every
+    mode and sequence shared out over the cores."""
+
+    def __init__(self, n_inputs, n_outputs, width, n_layers, n_modes, rng, r_min=0.9, r_max=0.9995,
+                 max_phase=0.6 * np.pi, single=True):
+        def linear(n_in, n_out):
+            bound = 1.0 / np.sqrt(n_in)
+            return rng.uniform(-bound, bound, (n_out, n_in)), rng.uniform(-bound, bound, n_out)
+
+        p = {}
+        p["enc_W"], p["enc_b"] = linear(n_inputs, width)
+        p["dec_W"], p["dec_b"] = linear(width, n_outputs)
+        for k in range(n_layers):
+            # radii uniform in the ring r_min..r_max (by their squares), phases up to max_phase a sample
+            r2 = rng.uniform(r_min**2, r_max**2, n_modes)
+            p[f"nu{k}"] = np.log(-0.5 * np.log(r2))
+            p[f"theta{k}"] = np.log(rng.uniform(0.0, max_phase, n_modes) + 1e-3)
+            p[f"B{k}"] = (rng.standard_normal((n_modes, width)) + 1j * rng.standard_normal((n_modes, width))) \
+                / np.sqrt(2 * width)
+            p[f"C{k}"] = (rng.standard_normal((width, n_modes)) + 1j * rng.standard_normal((width, n_modes))) \
+                / np.sqrt(n_modes)
+            p[f"D{k}"] = 0.1 * rng.standard_normal(width)
+            p[f"ln_g{k}"], p[f"ln_b{k}"] = np.ones(width), np.zeros(width)
+            p[f"mix_W{k}"], p[f"mix_b{k}"] = linear(width, width)
+        self.params = p
+        self.n_layers = n_layers
+        # signals and products in single precision (the parameters and their gradients stay double)
+        self.real = np.float32 if single else np.float64
+
+    @property
+    def n_params(self):
+        return int(sum(v.size * (2 if np.iscomplexobj(v) else 1) for v in self.params.values()))
+
+    def eigenvalues(self, k):
+        """The recursions' eigenvalues ``lam`` of layer ``k``."""
+        p = self.params
+        return np.exp(-np.exp(p[f"nu{k}"]) + 1j * np.exp(p[f"theta{k}"]))
+
+    # --- one recursion layer -------------------------------------------------
+    def _recursion(self, k, v, periodic):
+        """``Re(C s) + D v`` of the recursions ``s(t) = lam s(t - 1) + B
+        v(t)`` of layer ``k`` driven by ``v`` (n_samples, width), from rest
+        or in periodic steady state; and what the backward pass needs. The
+        complex products are taken as real ones on the real and imaginary
+        parts (``v`` is real)."""
+        p = self.params
+        lam = self.eigenvalues(k)
+        gamma = np.sqrt(1.0 - np.abs(lam) ** 2)  # unit gain at every radius
+        B = p[f"B{k}"] * gamma[:, None]
+        B_re, B_im = B.real.astype(self.real), B.imag.astype(self.real)
+        C_re, C_im = p[f"C{k}"].real.astype(self.real), p[f"C{k}"].imag.astype(self.real)
+        shape = (B.shape[0], *self._batch)
+        s_re, s_im = _recurse((B_re @ v.T).reshape(shape), (B_im @ v.T).reshape(shape), lam, periodic, False)
+        s_re, s_im = s_re.reshape(shape[0], -1), s_im.reshape(shape[0], -1)  # (n_modes, n_sequences * n_samples)
+        out = (C_re @ s_re - C_im @ s_im).T + p[f"D{k}"].astype(self.real) * v
+        return out, (v, lam, gamma, B_re, B_im, C_re, C_im, s_re, s_im, periodic)
+
+    def _recursion_backward(self, k, g_out, cache, grads):
+        v, lam, gamma, B_re, B_im, C_re, C_im, s_re, s_im, periodic = cache
+        p = self.params
+        grads[f"D{k}"] = np.sum(g_out * v, axis=0, dtype=np.float64)
+        g_v = g_out * p[f"D{k}"].astype(self.real)
+        # Re(C s): dL/dC = g conj(s), dL/ds = conj(C)^T g (gradients as dRe + i dIm)
+        g_T = np.ascontiguousarray(g_out.T)
+        grads[f"C{k}"] = (g_T @ s_re.T).astype(np.float64) - 1j * (g_T @ s_im.T)
+        shape = (s_re.shape[0], *self._batch)
+        G_re, G_im = _recurse((C_re.T @ g_T).reshape(shape), -(C_im.T @ g_T).reshape(shape), lam, periodic,
+                              True)  # through the recursion
+        G_lam = _pole_gradient(s_re.reshape(shape), s_im.reshape(shape), G_re, G_im, periodic)
+        G_re, G_im = G_re.reshape(shape[0], -1), G_im.reshape(shape[0], -1)
+        G_B = (G_re @ v).astype(np.float64) + 1j * (G_im @ v)
+        g_v += (G_re.T @ B_re + G_im.T @ B_im)
+        grads[f"B{k}"] = G_B * gamma[:, None]
+        g_gamma = np.real(np.sum(np.conj(G_B) * p[f"B{k}"], axis=1))
+        # lam = exp(z), z = -exp(nu) + i exp(theta); gamma = sqrt(1 - exp(-2 exp(nu)))
+        G_z = np.conj(lam) * G_lam
+        e_nu, e_theta = np.exp(p[f"nu{k}"]), np.exp(p[f"theta{k}"])
+        grads[f"nu{k}"] = -e_nu * np.real(G_z) + g_gamma * e_nu * np.abs(lam) ** 2 / gamma
+        grads[f"theta{k}"] = e_theta * np.imag(G_z)
+        return g_v
+
+    # --- the network -----------------------------------------------------------
+    def forward(self, x, periodic, keep=False):
+        """The network's output (n_samples, n_outputs) for ``x`` (n_samples,
+        n_inputs), or for a batch (n_sequences, n_samples, n_inputs): from
+        rest, or in periodic steady state over each sequence (one period)."""
+        p = {k: v.astype(self.real) for k, v in self.params.items() if not np.iscomplexobj(v)}
+        shape = x.shape
+        self._batch = (1, shape[0]) if x.ndim == 2 else shape[:2]
+        x = x.reshape(-1, shape[-1]).astype(self.real)
+        caches = []
+        h = x @ p["enc_W"].T + p["enc_b"]
+        for k in range(self.n_layers):
+            mu = h.mean(axis=1, keepdims=True)
+            centred = h - mu
+            inv_std = 1.0 / np.sqrt(np.mean(centred**2, axis=1, keepdims=True) + 1e-5)
+            normed = centred * inv_std
+            v = normed * p[f"ln_g{k}"] + p[f"ln_b{k}"]
+            r, rec_cache = self._recursion(k, v, periodic)
+            a, da = _gelu(r)
+            h = h + a @ p[f"mix_W{k}"].T + p[f"mix_b{k}"]
+            if keep:
+                caches.append((normed, inv_std, rec_cache, a, da))
+        if keep:
+            self._cache = (x, h, caches, p, shape)
+        out = h @ p["dec_W"].T + p["dec_b"]
+        return out.reshape(*shape[:-1], out.shape[-1])
+
+    def backward(self, g_out):
+        """The gradients of a loss whose gradient with respect to the last
+        :meth:`forward` (with ``keep=True``)'s output is ``g_out``."""
+        x, h, caches, p, shape = self._cache
+        self._batch = (1, shape[0]) if len(shape) == 2 else shape[:2]
+        grads = {}
+        g_out = g_out.reshape(-1, g_out.shape[-1]).astype(self.real)
+        grads["dec_W"], grads["dec_b"] = g_out.T @ h, g_out.sum(axis=0)
+        g_h = g_out @ p["dec_W"]
+        for k in reversed(range(self.n_layers)):
+            normed, inv_std, rec_cache, a, da = caches[k]
+            grads[f"mix_W{k}"], grads[f"mix_b{k}"] = g_h.T @ a, g_h.sum(axis=0)
+            g_r = (g_h @ p[f"mix_W{k}"]) * da
+            g_v = self._recursion_backward(k, g_r, rec_cache, grads)
+            grads[f"ln_g{k}"], grads[f"ln_b{k}"] = np.sum(g_v * normed, axis=0), g_v.sum(axis=0)
+            g_n = g_v * p[f"ln_g{k}"]
+            g_h = g_h + inv_std * (g_n - g_n.mean(axis=1, keepdims=True)
+                                   - normed * np.mean(g_n * normed, axis=1, keepdims=True))
+        grads["enc_W"], grads["enc_b"] = g_h.T @ x, g_h.sum(axis=0)
+        self._cache = None
+        return {k: np.asarray(g, dtype=self.params[k].dtype) for k, g in grads.items()}
+
+
+class _Adam:
+    """Adam on the network's parameters (complex ones as their real and
+    imaginary parts), its step size and first moment set per iteration."""
+
+    def __init__(self, params, beta2=0.999, eps=1e-8):
+        self.beta2, self.eps, self.t = beta2, eps, 0
+        self.m = {k: np.zeros(_real(v).shape) for k, v in params.items()}
+        self.v = {k: np.zeros(_real(v).shape) for k, v in params.items()}
+
+    def step(self, params, grads, lr, beta1):
+        self.t += 1
+        for k, p in params.items():
+            g, m, v = _real(grads[k]), self.m[k], self.v[k]
+            m *= beta1
+            m += (1 - beta1) * g
+            v *= self.beta2
+            v += (1 - self.beta2) * g * g
+            m_hat = m / (1 - beta1**self.t)
+            v_hat = v / (1 - self.beta2**self.t)
+            _real(p)[...] -= lr * m_hat / (np.sqrt(v_hat) + self.eps)
+
+
+def _real(a):
+    """A real view of an array (a complex one's real and imaginary parts
+    side by side)."""
+    return a.view(np.float64) if np.iscomplexobj(a) else a
+
+
+def one_cycle(n_iter, max_lr, warm_fraction=0.1, div=25.0, final_div=1e4, beta1_range=(0.85, 0.95)):
+    """The step size and Adam's first-moment factor at each iteration of a
+    one-cycle schedule (Smith and Topin 2019): the step rises from
+    ``max_lr / div`` to ``max_lr`` over the first ``warm_fraction`` of the
+    iterations while the momentum falls, then both return on a cosine, the
+    step to ``max_lr / (div * final_div)``."""
+    warm = max(1, int(round(warm_fraction * n_iter)))
+    lo, hi = beta1_range
+    for i in range(n_iter):
+        if i < warm:
+            frac = i / warm
+            lr_a, lr_b, b_a, b_b = max_lr / div, max_lr, hi, lo
+        else:
+            frac = (i - warm) / max(1, n_iter - 1 - warm)
+            lr_a, lr_b, b_a, b_b = max_lr, max_lr / (div * final_div), lo, hi
+        cos = 0.5 * (1 + np.cos(np.pi * frac))
+        yield lr_b + (lr_a - lr_b) * cos, b_b + (b_a - b_b) * cos
+
+
+def fit_network(network, signals, n_iter, learning_rate, segment_length, burn_in, rng, project=None, clip=1.0):
+    """Fit ``network`` by Adam on ``signals``, each a tuple ``(inputs,
+    target, weights, periodic)``: the loss is the mean over the signals of
+    the mean over time and outputs of ``weights * error**2``. A periodic
+    signal (one period in steady state) is taken whole at every iteration;
+    one from rest, a random segment of ``segment_length`` samples simulated
+    from rest, its first ``burn_in`` samples not scored (a segment from the
+    middle of a record starts from a state it does not know) unless it
+    starts the record. The pieces of one length and kind go through the
+    network as one batch. ``project(out, periodic)``: a self-adjoint linear
+    map along the samples of each output (n_samples, n_outputs), applied to
+    the network's output before the error (what of it the model keeps), or
+    None. Returns the loss at each iteration."""
+    adam = _Adam(network.params)
+    losses = []
+    for lr, beta1 in one_cycle(n_iter, learning_rate):
+        batches = {}
+        for inputs, target, weights, periodic in signals:
+            n = inputs.shape[0]
+            start, stop, skip = 0, n, 0
+            if not periodic and n > segment_length:
+                start = int(rng.integers(0, n - segment_length + 1))
+                stop, skip = start + segment_length, (0 if start == 0 else min(burn_in, segment_length // 2))
+            scored = np.ones((stop - start, 1))
+            scored[:skip] = 0.0
+            piece = (inputs[start:stop], target[start:stop], weights * scored / (np.sum(scored) * target.shape[1]))
+            batches.setdefault((periodic, stop - start), []).append(piece)
+        total, grads = 0.0, None
+        for (periodic, _), pieces in batches.items():
+            inputs, target, weights = (np.stack(part) for part in zip(*pieces))
+            out = network.forward(inputs, periodic, keep=True)
+            if project is not None:
+                out = np.stack([project(o, periodic) for o in out])
+            error = out - target
+            total += float(np.sum(weights * error**2)) / len(signals)
+            g = 2.0 * weights * error / len(signals)
+            if project is not None:
+                g = np.stack([project(piece, periodic) for piece in g])
+            g = network.backward(g)
+            grads = g if grads is None else {k: grads[k] + g[k] for k in g}
+        norm = np.sqrt(sum(float(np.sum(_real(g) ** 2)) for g in grads.values()))
+        if norm > clip:
+            grads = {k: g * (clip / norm) for k, g in grads.items()}
+        adam.step(network.params, grads, lr, beta1)
+        losses.append(total)
+    return np.array(losses)

@@ -1,0 +1,296 @@
+"""The response above the excited band, learned by a deep recurrent network.
+
+:class:`~sklearn_pnlss.AboveBandRegressor` maps a structure's knocking onto
+its outputs through fixed features (the force above the band switched on
+by a gate, hinges of the simulated motion) and FIR filters, all fitted by
+least squares. How hard the joint knocks, and which modes ring, depends on
+the motion in ways no fixed feature holds. Here a deep network of linear
+recurrent units (LRU, Orvieto et al., ICML 2023) learns that map instead:
+it reads the force, the force's content above the band and the model's own
+simulation, and gives the part of the outputs above the band. Its
+recursions are stable by construction and run on a whole signal at once in
+the frequency domain (exact periodic steady state for a periodic signal);
+it is fitted by Adam with exact gradients (``_lru``). The model stays a
+simulator of a new force: nothing measured at the output is read.
+"""
+from numbers import Integral, Real
+
+import numpy as np
+from scipy import fft as sfft
+from sklearn.base import BaseEstimator, clone
+from sklearn.utils import check_random_state
+from sklearn.utils.validation import check_is_fitted
+
+from ..utils.parameters import Interval, validates_parameters
+from ..utils.validation import restore_layout, signal_layout, validate_signals
+from ._base import DynamicRegressorMixin
+from ._gated import above_cutoff
+from ._lru import LRUNetwork, fit_network
+from .above_band import _state_space_step
+from .bla import BLAEstimator
+
+__all__ = ["LRUAboveBandRegressor"]
+
+
+class LRUAboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
+    """A state-space model plus a deep recurrent network of its response
+    above the excited band.
+
+    ``regressor`` is fitted as usual; a network of ``n_layers`` residual
+    layers of linear recurrent units (each ``n_modes`` stable complex
+    first-order recursions, a GELU, a linear mixing of ``width`` channels)
+    then reads the input, the input's content above ``cutoff`` and the
+    regressor's simulation, and is fitted by Adam to the regressor's
+    simulation error above ``cutoff``. Its output is kept above ``cutoff``
+    too, so the regressor's response in the band is left as it is. For
+    structures whose joints knock: the impacts ring modes above the band at
+    an amplitude and in a pattern that the motion sets, which a learned
+    dynamic map holds better than fixed features through filters
+    (:class:`AboveBandRegressor`).
+
+    A periodic signal (length a multiple of the regressor's ``period``) is
+    simulated in periodic steady state, exactly: the network's recursions
+    are solved circularly over one period. Any other signal starts from
+    rest. In training, a periodic signal is its periods' mean (the
+    measurement's noise and what does not repeat average out), taken whole
+    at every iteration; a signal from rest gives a random segment of
+    ``segment_length`` samples an iteration, simulated from rest, its first
+    ``burn_in`` samples not scored unless the segment starts the record.
+
+    Parameters
+    ----------
+    regressor : estimator or None, default=None
+        One of the library's regressors, or a Pipeline ending in one; None
+        fits ``BLAEstimator()``. Cloned at fit; wrap a fitted model in
+        :class:`sklearn.frozen.FrozenEstimator` to keep it as it is.
+    cutoff : float or None, default=None
+        The highest frequency the input excites, in the units of ``fs``:
+        the content above it is modelled. Required.
+    fs : float, default=1.0
+        Sampling frequency.
+    width : int, default=32
+        Channels between the layers.
+    n_layers : int, default=3
+        Residual layers.
+    n_modes : int, default=64
+        Complex recursions per layer; their radii start uniform between 0.9
+        and 0.9995 (time constants of 10 to 2,000 samples), their angles
+        between 0 and 0.6 pi a sample (0.3 ``fs``).
+    max_iter : int, default=300
+        Adam iterations, on a one-cycle schedule (the step rises to
+        ``learning_rate`` over the first tenth, then falls on a cosine).
+    learning_rate : float, default=3e-3
+        Adam's largest step.
+    segment_length : int, default=16384
+        Samples of each signal from rest an iteration takes.
+    burn_in : int, default=4096
+        Samples at a segment's start left out of its error (the network's
+        recursions settle from rest; at most half the segment).
+    random_state : int, RandomState instance or None, default=None
+        The network's initial weights and the segments drawn.
+
+    Attributes
+    ----------
+    regressor_ : estimator
+        The fitted state-space model.
+    network_ : LRUNetwork
+        The fitted network (``network_.params``), in units of its scaled
+        inputs and outputs.
+    input_scale_ : ndarray of shape (2 * n_inputs + n_outputs,)
+        The training rms of the input, of its content above ``cutoff`` and
+        of the regressor's simulation: the network reads each divided by it.
+    output_scale_ : ndarray of shape (n_outputs,)
+        The rms of the regressor's training error above ``cutoff``: the
+        network's output is in its units.
+    loss_curve_ : ndarray of shape (max_iter,)
+        The training loss at each iteration: the mean over signals and
+        outputs of the error's power above ``cutoff`` over the output's
+        power (NRMSE squared), before the step.
+    explained_fraction_ : ndarray of shape (n_outputs,)
+        The share of the regressor's training error power above ``cutoff``
+        the network explains (periodic signals in steady state, the others
+        from rest, whole).
+    n_map_params_ : int
+        The network's weights (a complex one counts twice).
+    n_params_ : int
+        The state-space model's parameters and ``n_map_params_``.
+    n_features_in_, n_outputs_ : int
+
+    Notes
+    -----
+    On the F-16 ground vibration test (``benchmarks/f16_lru.py``), fitted
+    on the estimation levels' multisines and sine sweeps on top of the
+    benchmark's decoupled model: see the README's F-16 section for the
+    figures. Each iteration costs a few forward and backward passes of
+    ``O(n_layers n_modes width nf)`` flops per signal (``nf`` the transform
+    length: one period, or twice a segment), so the fit grows with
+    ``max_iter`` and the number of signals, not with the records' lengths.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from scipy.signal import lfilter
+    >>> from sklearn_pnlss import BLAEstimator, LRUAboveBandRegressor
+    >>> from sklearn_pnlss.metrics import nrmse_by_band
+    >>> rng = np.random.default_rng(0)
+    >>> def fast(u):  # the content of u above 0.1 cycles per sample
+    ...     U = np.fft.rfft(u)
+    ...     U[np.fft.rfftfreq(u.size) <= 0.1] = 0
+    ...     return np.fft.irfft(U, u.size)
+    >>> def record(n=4096):  # a slow force with some fast content; a rattle at large motion
+    ...     u = lfilter([0.1], [1, -0.9], rng.standard_normal(n)) + 0.05 * rng.standard_normal(n)
+    ...     y = lfilter([0.0, 0.1], [1, -0.9], u)
+    ...     knock = np.maximum(y**2 - 2 * np.var(y), 0) * fast(u)
+    ...     return u[:, None], (y + lfilter([0.0, 1.0], [1, 0.5], knock))[:, None]
+    >>> (u, y), (u_new, y_new) = record(), record()
+    >>> model = LRUAboveBandRegressor(BLAEstimator(2, fs=1.0), cutoff=0.1, width=8, n_layers=2, n_modes=16,
+    ...                               max_iter=150, segment_length=1024, burn_in=128, random_state=0)
+    >>> model = model.fit(u, y)
+    >>> alone = BLAEstimator(2, fs=1.0).fit(u, y)
+    >>> def error_above(m):  # NRMSE of the new record above the cutoff
+    ...     return float(nrmse_by_band(y_new, m.predict(u_new), fs=1.0, edges=(0.1, 0.51))[0, 0])
+    >>> round(error_above(alone), 4), round(error_above(model), 4)
+    """
+
+    _parameter_constraints = {
+        "regressor": [BaseEstimator, None],
+        "cutoff": [Interval(Real, 0, None, closed="neither"), None],
+        "fs": [Interval(Real, 0, None, closed="neither")],
+        "width": [Interval(Integral, 1, None, closed="left")],
+        "n_layers": [Interval(Integral, 1, None, closed="left")],
+        "n_modes": [Interval(Integral, 1, None, closed="left")],
+        "max_iter": [Interval(Integral, 1, None, closed="left")],
+        "learning_rate": [Interval(Real, 0, None, closed="neither")],
+        "segment_length": [Interval(Integral, 2, None, closed="left")],
+        "burn_in": [Interval(Integral, 0, None, closed="left")],
+        "random_state": ["random_state"],
+    }
+
+    def __init__(self, regressor=None, *, cutoff=None, fs=1.0, width=32, n_layers=3, n_modes=64, max_iter=300,
+                 learning_rate=3e-3, segment_length=16384, burn_in=4096, random_state=None):
+        self.regressor = regressor
+        self.cutoff = cutoff
+        self.fs = fs
+        self.width = width
+        self.n_layers = n_layers
+        self.n_modes = n_modes
+        self.max_iter = max_iter
+        self.learning_rate = learning_rate
+        self.segment_length = segment_length
+        self.burn_in = burn_in
+        self.random_state = random_state
+
+    @validates_parameters
+    def fit(self, X, y, **fit_params):
+        """Fit ``regressor``, then the network on its error above ``cutoff``.
+
+        Parameters
+        ----------
+        X : signals, as the regressor takes them
+        y : signals with n_outputs channels, same layout and lengths
+        **fit_params : dict
+            Passed on to the regressor's ``fit`` (validation signals).
+
+        Returns
+        -------
+        self
+        """
+        if y is None:
+            raise ValueError("LRUAboveBandRegressor requires y to be passed, but the target y is None.")
+        if self.cutoff is None:
+            raise ValueError("cutoff: pass the highest frequency the input excites (in the units of fs); "
+                             "the content above it is what this model adds.")
+        if self.cutoff >= self.fs / 2:
+            raise ValueError(f"cutoff={self.cutoff} is at or above the Nyquist frequency fs / 2 = "
+                             f"{self.fs / 2}; nothing lies above it. Pass a cutoff below fs / 2.")
+        X_list, y_list, _ = validate_signals(self, X, y, reset=True)
+        rng = check_random_state(self.random_state)
+        self.regressor_ = clone(self.regressor) if self.regressor is not None else BLAEstimator()
+        self.regressor_.fit(X, y, **fit_params)
+        self.n_outputs_ = y_list[0].shape[1]
+        self._y_was_1d = signal_layout(y).kind == "1d"
+
+        views = [self._view(U) for U in X_list]
+        targets = [self._one_period(above_cutoff(Y - p, self.cutoff, self.fs), period)
+                   for Y, (_, p, period) in zip(y_list, views)]
+        self.input_scale_ = _rms([v for v, _, _ in views])
+        self.output_scale_ = _rms(targets)
+        power = [np.mean(self._one_period(Y, period) ** 2, axis=0) for Y, (_, _, period) in zip(y_list, views)]
+        signals = [(v / self.input_scale_, t / self.output_scale_,
+                    self.output_scale_**2 / np.maximum(pw, np.finfo(float).tiny), period is not None)
+                   for (v, _, period), t, pw in zip(views, targets, power)]
+        self.network_ = LRUNetwork(self.input_scale_.size, self.n_outputs_, self.width, self.n_layers, self.n_modes,
+                                   np.random.default_rng(rng.randint(2**32)))
+        self.loss_curve_ = fit_network(self.network_, signals, self.max_iter, self.learning_rate,
+                                       self.segment_length, self.burn_in, np.random.default_rng(rng.randint(2**32)),
+                                       self._above_cutoff)
+        after = [t - self._network_output(v, period) for (v, _, period), t in zip(views, targets)]
+        self.explained_fraction_ = 1.0 - (np.mean(np.vstack(after) ** 2, axis=0)
+                                          / np.maximum(np.mean(np.vstack(targets) ** 2, axis=0), np.finfo(float).tiny))
+        self.n_map_params_ = self.network_.n_params
+        self.n_params_ = _state_space_step(self.regressor_).n_params_ + self.n_map_params_
+        return self
+
+    def _above_cutoff(self, out, periodic):
+        """The content of the network's output above ``cutoff``: circularly
+        over a period, else over the signal padded with as many zeros (a
+        symmetric filter, its own adjoint)."""
+        n = out.shape[0]
+        nf = n if periodic else sfft.next_fast_len(2 * n, real=True)
+        spectrum = sfft.rfft(out, nf, axis=0, workers=-1)
+        spectrum[sfft.rfftfreq(nf, 1.0 / self.fs) <= self.cutoff] = 0.0
+        return sfft.irfft(spectrum, nf, axis=0, workers=-1)[:n]
+
+    def _view(self, U):
+        """What the network reads along one signal (the input, its content
+        above ``cutoff``, the regressor's simulation), over one period if
+        the signal is periodic (its periods' mean); the simulation over the
+        whole signal; and the period, or None."""
+        step = _state_space_step(self.regressor_)
+        period = step._period() if step._signal_is_periodic(U.shape[0]) else None
+        prediction = np.asarray(self.regressor_.predict(U)).reshape(U.shape[0], -1)
+        view = np.hstack([U, above_cutoff(U, self.cutoff, self.fs), prediction])
+        return self._one_period(view, period), prediction, period
+
+    @staticmethod
+    def _one_period(signal, period):
+        """The mean of a periodic signal's periods, or the signal."""
+        if period is None:
+            return signal
+        return signal.reshape(-1, period, signal.shape[1]).mean(axis=0)
+
+    def _network_output(self, view, period):
+        """The network's output in its units of the regressor's error (one
+        period in steady state, or from rest)."""
+        out = self.network_.forward(view / self.input_scale_, period is not None)
+        return self._above_cutoff(out, period is not None) * self.output_scale_
+
+    def predict(self, X):
+        """The regressor's simulation plus the network's response above
+        ``cutoff``.
+
+        Parameters
+        ----------
+        X : signals, as in the regressor's ``predict``
+
+        Returns
+        -------
+        y_pred : signals in the layout of ``X``
+        """
+        check_is_fitted(self)
+        X_list, _, layout = validate_signals(self, X, reset=False, min_samples=1)
+        out = []
+        for U in X_list:
+            view, prediction, period = self._view(U)
+            above = self._network_output(view, period)
+            if period is not None:
+                above = np.tile(above, (U.shape[0] // period, 1))
+            out.append(prediction + above)
+        return restore_layout(out, layout, squeeze_1d=self._y_was_1d)
+
+
+def _rms(signals):
+    """The rms of each channel over signals (1 where it is zero)."""
+    scale = np.sqrt(np.mean(np.vstack(signals) ** 2, axis=0))
+    scale[scale == 0] = 1.0
+    return scale
