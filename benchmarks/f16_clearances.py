@@ -37,8 +37,8 @@ included) and the parameter counts. Then, for each route, the mean of the
 first two and of all three draws' models (``AveragedRegressor``'s
 prediction; its fit time the BLA's plus each member's). Writes
 ``results/f16_clearances.json``; its ``best`` is the row of lowest mean
-test NRMSE fitted in under ten minutes, the best F-16 model of the
-benchmarks (``bench_f16.py``'s own ``best`` is among its rows only).
+test NRMSE fitted in under ten minutes among its rows (``f16_lru.py``'s
+``best``, a network above the band, is lower).
 """
 import argparse
 import sys

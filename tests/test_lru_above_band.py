@@ -85,10 +85,12 @@ def knocking_record(rng, n=4096, period=None):
 
 
 def test_explains_the_rattle_on_a_new_record():
-    """Trained on two records, the network takes a third of the power above
-    the band off a third record's error (the linear model's 0.0110 to
-    0.0086 NRMSE there); the recursions stay stable; the band is left to
-    the linear model."""
+    """Trained on two records, the network takes half the power above the
+    band off a third record's error (the linear model's NRMSE there 0.0121,
+    with the network 0.0083); the recursions stay stable; the band is left
+    to the linear model (but for the edges of a record from rest, where the
+    network's output, kept above the cutoff over the record padded with
+    zeros, leaks a little into it)."""
     rng = np.random.default_rng(0)
     (u1, y1), (u2, y2), (u_new, y_new) = (knocking_record(rng) for _ in range(3))
     model = LRUAboveBandRegressor(BLAEstimator(2, fs=1.0), cutoff=0.1, width=8, n_layers=2, n_modes=16,
@@ -98,14 +100,14 @@ def test_explains_the_rattle_on_a_new_record():
     above = (0.1, 0.51)
     before = nrmse_by_band(y_new, alone.predict(u_new), fs=1.0, edges=above)[0, 0]
     after = nrmse_by_band(y_new, model.predict(u_new), fs=1.0, edges=above)[0, 0]
-    assert before == pytest.approx(0.0110, abs=5e-4)
-    assert after < 0.8 * before
+    assert before == pytest.approx(0.0121, abs=5e-4)
+    assert after < 0.75 * before
     in_band = (0.0, 0.1)
     np.testing.assert_allclose(nrmse_by_band(y_new, model.predict(u_new), fs=1.0, edges=in_band),
-                               nrmse_by_band(y_new, alone.predict(u_new), fs=1.0, edges=in_band), rtol=1e-6)
+                               nrmse_by_band(y_new, alone.predict(u_new), fs=1.0, edges=in_band), rtol=2e-3)
     for k in range(model.n_layers):
         assert np.abs(model.network_.eigenvalues(k)).max() < 1.0
-    assert model.loss_curve_.shape == (200,) and model.explained_fraction_[0] > 0.3
+    assert model.loss_curve_.shape == (200,) and model.explained_fraction_[0] > 0.5
     assert model.n_params_ == model.regressor_.n_params_ + model.n_map_params_
 
 

@@ -106,6 +106,8 @@ class LRUAboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         The training loss at each iteration: the mean over signals and
         outputs of the error's power above ``cutoff`` over the output's
         power (NRMSE squared), before the step.
+    n_iter_ : int
+        The Adam iterations run (``max_iter``).
     explained_fraction_ : ndarray of shape (n_outputs,)
         The share of the regressor's training error power above ``cutoff``
         the network explains (periodic signals in steady state, the others
@@ -142,14 +144,14 @@ class LRUAboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
     ...     y = lfilter([0.0, 0.1], [1, -0.9], u)
     ...     knock = np.maximum(y**2 - 2 * np.var(y), 0) * fast(u)
     ...     return u[:, None], (y + lfilter([0.0, 1.0], [1, 0.5], knock))[:, None]
-    >>> (u, y), (u_new, y_new) = record(), record()
+    >>> (u, y), (u_2, y_2), (u_new, y_new) = record(), record(), record()
     >>> model = LRUAboveBandRegressor(BLAEstimator(2, fs=1.0), cutoff=0.1, width=8, n_layers=2, n_modes=16,
-    ...                               max_iter=150, segment_length=1024, burn_in=128, random_state=0)
-    >>> model = model.fit(u, y)
-    >>> alone = BLAEstimator(2, fs=1.0).fit(u, y)
+    ...                               max_iter=200, segment_length=2048, burn_in=128, random_state=0)
+    >>> model = model.fit([u, u_2], [y, y_2])
     >>> def error_above(m):  # NRMSE of the new record above the cutoff
     ...     return float(nrmse_by_band(y_new, m.predict(u_new), fs=1.0, edges=(0.1, 0.51))[0, 0])
-    >>> round(error_above(alone), 4), round(error_above(model), 4)
+    >>> round(error_above(model.regressor_), 4), round(error_above(model), 4)
+    (0.0121, 0.0083)
     """
 
     _parameter_constraints = {
@@ -224,6 +226,7 @@ class LRUAboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         self.loss_curve_ = fit_network(self.network_, signals, self.max_iter, self.learning_rate,
                                        self.segment_length, self.burn_in, np.random.default_rng(rng.randint(2**32)),
                                        self._above_cutoff)
+        self.n_iter_ = self.loss_curve_.size
         after = [t - self._network_output(v, period) for (v, _, period), t in zip(views, targets)]
         self.explained_fraction_ = 1.0 - (np.mean(np.vstack(after) ** 2, axis=0)
                                           / np.maximum(np.mean(np.vstack(targets) ** 2, axis=0), np.finfo(float).tiny))
