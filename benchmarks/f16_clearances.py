@@ -151,6 +151,23 @@ def averaged_rows(draw_models, start_s, test):
     return rows
 
 
+def load_and_start(data_dir):
+    """The estimation multisines, the test levels (their sweeps set for
+    ``bench_f16``'s rows), the estimation levels' sweeps, and the BLA of
+    STATES states every draw starts from, with its fit time."""
+    from sklearn_pnlss import BLAEstimator
+    from sklearn_pnlss.datasets import load_f16
+
+    X, y, test = bench_f16.load(data_dir)
+    bench_f16.TEST_SWEEPS.update({lv: load_f16(data_dir, level=lv, kind="sinesweep", validation_level=None)
+                                  for lv in bench_f16.TEST_LEVELS})
+    train_sweeps = [load_f16(data_dir, level=lv, kind="sinesweep", validation_level=None)
+                    for lv in bench_f16.TRAIN_LEVELS]
+    t0 = time.perf_counter()
+    start = BLAEstimator(STATES, period=8192, fs=400.0).fit(X, y)
+    return X, y, test, train_sweeps, start, time.perf_counter() - t0
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--data-dir", default=bench_f16.DEFAULT_DATA)
@@ -158,17 +175,7 @@ def main(argv=None):
     parser.add_argument("--output", default=RESULTS / "f16_clearances.json")
     args = parser.parse_args(argv)
 
-    from sklearn_pnlss import BLAEstimator
-    from sklearn_pnlss.datasets import load_f16
-
-    X, y, test = bench_f16.load(args.data_dir)
-    bench_f16.TEST_SWEEPS.update({lv: load_f16(args.data_dir, level=lv, kind="sinesweep", validation_level=None)
-                                  for lv in bench_f16.TEST_LEVELS})
-    train_sweeps = [load_f16(args.data_dir, level=lv, kind="sinesweep", validation_level=None)
-                    for lv in bench_f16.TRAIN_LEVELS]
-    t0 = time.perf_counter()
-    start = BLAEstimator(STATES, period=8192, fs=400.0).fit(X, y)
-    start_s = time.perf_counter() - t0
+    X, y, test, train_sweeps, start, start_s = load_and_start(args.data_dir)
     results = {**header(), "protocol": {"train_levels": bench_f16.TRAIN_LEVELS, "test_levels": bench_f16.TEST_LEVELS},
                "published": bench_f16.PUBLISHED, "clearances": list(CLEARANCES),
                "hinge_alphas": list(HINGE_ALPHAS), "held_out_levels": list(HELD_OUT_LEVELS), "start_s": start_s,

@@ -31,7 +31,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import bench_f16  # noqa: E402
 from _bench_utils import RESULTS, header, write_results  # noqa: E402
-from f16_clearances import BASIS, BRANCHES, DEGREE, STATES, MeanOfMembers, map_signals  # noqa: E402
+from f16_clearances import (BASIS, BRANCHES, DEGREE, STATES, MeanOfMembers, load_and_start,  # noqa: E402
+                            map_signals)
 
 
 def draw_rows(seed, start, start_s, X, y, train_sweeps, test):
@@ -72,17 +73,7 @@ def main(argv=None):
     parser.add_argument("--output", default=RESULTS / "f16_lru.json")
     args = parser.parse_args(argv)
 
-    from sklearn_pnlss import BLAEstimator
-    from sklearn_pnlss.datasets import load_f16
-
-    X, y, test = bench_f16.load(args.data_dir)
-    bench_f16.TEST_SWEEPS.update({lv: load_f16(args.data_dir, level=lv, kind="sinesweep", validation_level=None)
-                                  for lv in bench_f16.TEST_LEVELS})
-    train_sweeps = [load_f16(args.data_dir, level=lv, kind="sinesweep", validation_level=None)
-                    for lv in bench_f16.TRAIN_LEVELS]
-    t0 = time.perf_counter()
-    start = BLAEstimator(STATES, period=8192, fs=400.0).fit(X, y)
-    start_s = time.perf_counter() - t0
+    X, y, test, train_sweeps, start, start_s = load_and_start(args.data_dir)
     results = {**header(), "protocol": {"train_levels": bench_f16.TRAIN_LEVELS, "test_levels": bench_f16.TEST_LEVELS},
                "published": bench_f16.PUBLISHED, "start_s": start_s, "draws": [], "averages": []}
     members = {}

@@ -93,6 +93,19 @@ def _state_space_step(regressor):
     return step
 
 
+def check_cutoff(estimator, y):
+    """The checks of a model above the band before its fit: a target, and a
+    ``cutoff`` below the Nyquist frequency."""
+    if y is None:
+        raise ValueError(f"{type(estimator).__name__} requires y to be passed, but the target y is None.")
+    if estimator.cutoff is None:
+        raise ValueError("cutoff: pass the highest frequency the input excites (in the units of fs); "
+                         "the content above it is what this model adds.")
+    if estimator.cutoff >= estimator.fs / 2:
+        raise ValueError(f"cutoff={estimator.cutoff} is at or above the Nyquist frequency fs / 2 = "
+                         f"{estimator.fs / 2}; nothing lies above it. Pass a cutoff below fs / 2.")
+
+
 class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
     """A state-space model plus its response above the excited band.
 
@@ -350,14 +363,7 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         -------
         self
         """
-        if y is None:
-            raise ValueError("AboveBandRegressor requires y to be passed, but the target y is None.")
-        if self.cutoff is None:
-            raise ValueError("cutoff: pass the highest frequency the input excites (in the units of fs); "
-                             "the content above it is what this model adds.")
-        if self.cutoff >= self.fs / 2:
-            raise ValueError(f"cutoff={self.cutoff} is at or above the Nyquist frequency fs / 2 = "
-                             f"{self.fs / 2}; nothing lies above it. Pass a cutoff below fs / 2.")
+        check_cutoff(self, y)
         if self.n_lead >= self.n_taps:
             raise ValueError(f"n_lead={self.n_lead} must be below n_taps={self.n_taps}: the filters reach from "
                              "n_lead samples ahead to n_taps - n_lead - 1 behind. Lower n_lead or raise n_taps.")

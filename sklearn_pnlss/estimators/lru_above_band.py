@@ -8,9 +8,9 @@ the motion in ways no fixed feature holds. Here a deep network of linear
 recurrent units (LRU, Orvieto et al., ICML 2023) learns that map instead:
 it reads the force, the force's content above the band and the model's own
 simulation, and gives the part of the outputs above the band. Its
-recursions are stable by construction and run on a whole signal at once in
-the frequency domain (exact periodic steady state for a periodic signal);
-it is fitted by Adam with exact gradients (``_lru``). The model stays a
+recursions are stable by construction and compiled (exact periodic steady
+state for a periodic signal); it is fitted by Adam with exact gradients
+(``_lru``: the adjoint recursion, no autodiff library). The model stays a
 simulator of a new force: nothing measured at the output is read.
 """
 from numbers import Integral, Real
@@ -26,7 +26,7 @@ from ..utils.validation import restore_layout, signal_layout, validate_signals
 from ._base import DynamicRegressorMixin
 from ._gated import above_cutoff
 from ._lru import LRUNetwork, fit_network
-from .above_band import _state_space_step
+from .above_band import _state_space_step, check_cutoff
 from .bla import BLAEstimator
 
 __all__ = ["LRUAboveBandRegressor"]
@@ -122,10 +122,12 @@ class LRUAboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
     -----
     On the F-16 ground vibration test (``benchmarks/f16_lru.py``), fitted
     on the estimation levels' multisines and sine sweeps on top of the
-    benchmark's decoupled model: see the README's F-16 section for the
-    figures. Each iteration costs a few forward and backward passes of
-    ``O(n_layers n_modes width nf)`` flops per signal (``nf`` the transform
-    length: one period, or twice a segment), so the fit grows with
+    benchmark's decoupled model of 18 states, it takes the mean test NRMSE
+    of one draw from 0.173 to 0.137, fitted in 334 s on 2 cores (the
+    README's F-16 section has the figures). An iteration passes each
+    periodic signal's period and one segment of each other signal forward
+    and back: about ``24 n_layers n_modes width`` flops a sample (the
+    products with ``B`` and ``C``, forward and back), so the fit grows with
     ``max_iter`` and the number of signals, not with the records' lengths.
 
     Examples
@@ -197,14 +199,7 @@ class LRUAboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         -------
         self
         """
-        if y is None:
-            raise ValueError("LRUAboveBandRegressor requires y to be passed, but the target y is None.")
-        if self.cutoff is None:
-            raise ValueError("cutoff: pass the highest frequency the input excites (in the units of fs); "
-                             "the content above it is what this model adds.")
-        if self.cutoff >= self.fs / 2:
-            raise ValueError(f"cutoff={self.cutoff} is at or above the Nyquist frequency fs / 2 = "
-                             f"{self.fs / 2}; nothing lies above it. Pass a cutoff below fs / 2.")
+        check_cutoff(self, y)
         X_list, y_list, _ = validate_signals(self, X, y, reset=True)
         rng = check_random_state(self.random_state)
         self.regressor_ = clone(self.regressor) if self.regressor is not None else BLAEstimator()
