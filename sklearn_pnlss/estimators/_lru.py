@@ -111,7 +111,10 @@ class LRUNetwork:
     sequences of one length, all periodic or all from rest, goes through
     at once (``x`` of shape (n_sequences, n_samples, n_inputs)): the
     products with the weights as one product each, the recursions of every
-    mode and sequence shared out over the cores."""
+    mode and sequence shared out over the cores. ``single``: the signals
+    and products in float32 (the parameters, their gradients and Adam's
+    moments stay float64); False computes in float64 throughout (what a
+    finite-difference check needs)."""
 
     def __init__(self, n_inputs, n_outputs, width, n_layers, n_modes, rng, r_min=0.9, r_max=0.9995,
                  max_phase=0.6 * np.pi, single=True):
@@ -136,7 +139,6 @@ class LRUNetwork:
             p[f"mix_W{k}"], p[f"mix_b{k}"] = linear(width, width)
         self.params = p
         self.n_layers = n_layers
-        # signals and products in single precision (the parameters and their gradients stay double)
         self.real = np.float32 if single else np.float64
 
     @property
