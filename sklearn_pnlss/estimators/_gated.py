@@ -15,20 +15,31 @@ from scipy import linalg
 
 from ..utils.threads import symmetric_threads_for
 
-__all__ = ["FirRidge", "above_cutoff", "apply_fir", "envelope", "fit_fir", "fit_gate", "gate", "hinges",
+__all__ = ["FirRidge", "above_cutoff", "apply_fir", "channel_rms", "envelope", "fit_fir", "fit_gate", "gate", "hinges",
            "integral_in_band", "lagged", "relative_motions"]
 
 # Rows of the gate's features held at once (8192 x 172 for 18 states: 11 MB).
 ROWS_PER_BLOCK = 8192
 
 
-def above_cutoff(signal, cutoff, fs):
+def above_cutoff(signal, cutoff, fs, n_fft=None):
     """The content of each channel of one (n_samples, n_channels) signal
     strictly above ``cutoff`` (zero phase: the DFT of the whole record with
-    the lines at and below ``cutoff`` set to zero)."""
-    spectrum = sfft.rfft(signal, axis=0, workers=-1)
-    spectrum[sfft.rfftfreq(signal.shape[0], 1.0 / fs) <= cutoff] = 0.0
-    return sfft.irfft(spectrum, signal.shape[0], axis=0, workers=-1)
+    the lines at and below ``cutoff`` set to zero). ``n_fft``: the
+    transform's length, the record padded with zeros to it (its own
+    length by default: circularly)."""
+    n = signal.shape[0] if n_fft is None else n_fft
+    spectrum = sfft.rfft(signal, n, axis=0, workers=-1)
+    spectrum[sfft.rfftfreq(n, 1.0 / fs) <= cutoff] = 0.0
+    return sfft.irfft(spectrum, n, axis=0, workers=-1)[: signal.shape[0]]
+
+
+def channel_rms(signals):
+    """The rms of each channel over (n_samples, n_channels) signals taken
+    together, 1 where it is zero (a scale to divide by)."""
+    scale = np.sqrt(np.mean(np.vstack(signals) ** 2, axis=0))
+    scale[scale == 0] = 1.0
+    return scale
 
 
 def integral_in_band(signal, low, high, fs, n_integrations):

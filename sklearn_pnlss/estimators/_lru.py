@@ -151,10 +151,11 @@ class LRUNetwork:
         return np.exp(-np.exp(p[f"nu{k}"]) + 1j * np.exp(p[f"theta{k}"]))
 
     # --- one recursion layer -------------------------------------------------
-    def _recursion(self, k, v, periodic):
+    def _recursion(self, k, v, batch, periodic):
         """``Re(C s) + D v`` of the recursions ``s(t) = lam s(t - 1) + B
-        v(t)`` of layer ``k`` driven by ``v`` (n_samples, width), from rest
-        or in periodic steady state; and what the backward pass needs. The
+        v(t)`` of layer ``k`` driven by ``v`` (n_sequences * n_samples,
+        width; ``batch`` = (n_sequences, n_samples)), from rest or in
+        periodic steady state; and what the backward pass needs. The
         complex products are taken as real ones on the real and imaginary
         parts (``v`` is real)."""
         p = self.params
@@ -163,24 +164,25 @@ class LRUNetwork:
         B = p[f"B{k}"] * gamma[:, None]
         B_re, B_im = B.real.astype(self.real), B.imag.astype(self.real)
         C_re, C_im = p[f"C{k}"].real.astype(self.real), p[f"C{k}"].imag.astype(self.real)
-        shape = (B.shape[0], *self._batch)
+        shape = (B.shape[0], *batch)
         s_re, s_im = _recurse((B_re @ v.T).reshape(shape), (B_im @ v.T).reshape(shape), lam, periodic, False)
-        s_re, s_im = s_re.reshape(shape[0], -1), s_im.reshape(shape[0], -1)  # (n_modes, n_sequences * n_samples)
-        out = (C_re @ s_re - C_im @ s_im).T + p[f"D{k}"].astype(self.real) * v
+        out = (C_re @ s_re.reshape(shape[0], -1) - C_im @ s_im.reshape(shape[0], -1)).T \
+            + p[f"D{k}"].astype(self.real) * v
         return out, (v, lam, gamma, B_re, B_im, C_re, C_im, s_re, s_im, periodic)
 
     def _recursion_backward(self, k, g_out, cache, grads):
-        v, lam, gamma, B_re, B_im, C_re, C_im, s_re, s_im, periodic = cache
+        v, lam, gamma, B_re, B_im, C_re, C_im, s_re, s_im, periodic = cache  # the states: (n_modes, *batch)
+        shape = s_re.shape
         p = self.params
         grads[f"D{k}"] = np.sum(g_out * v, axis=0, dtype=np.float64)
         g_v = g_out * p[f"D{k}"].astype(self.real)
         # Re(C s): dL/dC = g conj(s), dL/ds = conj(C)^T g (gradients as dRe + i dIm)
         g_T = np.ascontiguousarray(g_out.T)
-        grads[f"C{k}"] = (g_T @ s_re.T).astype(np.float64) - 1j * (g_T @ s_im.T)
-        shape = (s_re.shape[0], *self._batch)
+        grads[f"C{k}"] = (g_T @ s_re.reshape(shape[0], -1).T).astype(np.float64) \
+            - 1j * (g_T @ s_im.reshape(shape[0], -1).T)
         G_re, G_im = _recurse((C_re.T @ g_T).reshape(shape), -(C_im.T @ g_T).reshape(shape), lam, periodic,
                               True)  # through the recursion
-        G_lam = _pole_gradient(s_re.reshape(shape), s_im.reshape(shape), G_re, G_im, periodic)
+        G_lam = _pole_gradient(s_re, s_im, G_re, G_im, periodic)
         G_re, G_im = G_re.reshape(shape[0], -1), G_im.reshape(shape[0], -1)
         G_B = (G_re @ v).astype(np.float64) + 1j * (G_im @ v)
         g_v += (G_re.T @ B_re + G_im.T @ B_im)
@@ -200,7 +202,7 @@ class LRUNetwork:
         rest, or in periodic steady state over each sequence (one period)."""
         p = {k: v.astype(self.real) for k, v in self.params.items() if not np.iscomplexobj(v)}
         shape = x.shape
-        self._batch = (1, shape[0]) if x.ndim == 2 else shape[:2]
+        batch = (1, shape[0]) if x.ndim == 2 else shape[:2]
         x = x.reshape(-1, shape[-1]).astype(self.real)
         caches = []
         h = x @ p["enc_W"].T + p["enc_b"]
@@ -210,7 +212,7 @@ class LRUNetwork:
             inv_std = 1.0 / np.sqrt(np.mean(centred**2, axis=1, keepdims=True) + 1e-5)
             normed = centred * inv_std
             v = normed * p[f"ln_g{k}"] + p[f"ln_b{k}"]
-            r, rec_cache = self._recursion(k, v, periodic)
+            r, rec_cache = self._recursion(k, v, batch, periodic)
             a, da = _gelu(r)
             h = h + a @ p[f"mix_W{k}"].T + p[f"mix_b{k}"]
             if keep:
@@ -224,7 +226,6 @@ class LRUNetwork:
         """The gradients of a loss whose gradient with respect to the last
         :meth:`forward` (with ``keep=True``)'s output is ``g_out``."""
         x, h, caches, p, shape = self._cache
-        self._batch = (1, shape[0]) if len(shape) == 2 else shape[:2]
         grads = {}
         g_out = g_out.reshape(-1, g_out.shape[-1]).astype(self.real)
         grads["dec_W"], grads["dec_b"] = g_out.T @ h, g_out.sum(axis=0)

@@ -50,8 +50,8 @@ from sklearn.utils.validation import check_is_fitted
 from ..utils.parameters import Interval, validates_parameters
 from ..utils.validation import restore_layout, signal_layout, validate_signals
 from ._base import DynamicRegressorMixin
-from ._gated import (FirRidge, above_cutoff, apply_fir, envelope, fit_gate, gate, hinges, integral_in_band,
-                     relative_motions)
+from ._gated import (FirRidge, above_cutoff, apply_fir, channel_rms, envelope, fit_gate, gate, hinges,
+                     integral_in_band, relative_motions)
 from ._window_network import apply_networks, fit_networks, held_out_rows, windows
 from .bla import BLAEstimator
 
@@ -91,6 +91,15 @@ def _state_space_step(regressor):
             "ending in one."
         )
     return step
+
+
+def simulated(regressor, U):
+    """A fitted regressor's step that simulates states, the period it
+    simulates ``U`` with (None: from rest) and its simulation of ``U``
+    (n_samples, n_outputs)."""
+    step = _state_space_step(regressor)
+    period = step._period() if step._signal_is_periodic(U.shape[0]) else None
+    return step, period, np.asarray(regressor.predict(U)).reshape(U.shape[0], -1)
 
 
 def check_cutoff(estimator, y):
@@ -396,8 +405,7 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         signals = [self._signal(U) for U in X_list]
         residual = [above_cutoff(Y - s.prediction, self.cutoff, self.fs) for s, Y in zip(signals, y_list)]
         self.above_band_rms_ = np.sqrt(np.mean(np.vstack(residual) ** 2, axis=0))
-        self.state_scale_ = np.sqrt(np.mean(np.vstack([s.states for s in signals]) ** 2, axis=0))
-        self.state_scale_[self.state_scale_ == 0] = 1.0
+        self.state_scale_ = channel_rms([s.states for s in signals])
         window = max(1, int(round(self.fs / self.cutoff)))  # one period of the cutoff frequency
         envelopes = [envelope(r, self.above_band_rms_, window, s.periodic) for s, r in zip(signals, residual)]
         self.gate_coef_ = fit_gate([s.states for s in signals], envelopes, self._features)
@@ -471,9 +479,7 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
 
     def _signal(self, U):
         """One input signal as the model sees it (see ``_Signal``)."""
-        step = _state_space_step(self.regressor_)
-        period = step._period() if step._signal_is_periodic(U.shape[0]) else None
-        prediction = np.asarray(self.regressor_.predict(U)).reshape(U.shape[0], -1)
+        step, period, prediction = simulated(self.regressor_, U)
         states = step.model_.normalised_trajectory([U], period)[:, :-U.shape[1]]
         input_above = above_cutoff(U, self.cutoff, self.fs)
         return _Signal(prediction, states, input_above, U - input_above, period)

@@ -24,9 +24,9 @@ from sklearn.utils.validation import check_is_fitted
 from ..utils.parameters import Interval, validates_parameters
 from ..utils.validation import restore_layout, signal_layout, validate_signals
 from ._base import DynamicRegressorMixin
-from ._gated import above_cutoff
+from ._gated import above_cutoff, channel_rms
 from ._lru import LRUNetwork, fit_network
-from .above_band import _state_space_step, check_cutoff
+from .above_band import _state_space_step, check_cutoff, simulated
 from .bla import BLAEstimator
 
 __all__ = ["LRUAboveBandRegressor"]
@@ -210,8 +210,8 @@ class LRUAboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         views = [self._view(U) for U in X_list]
         targets = [self._one_period(above_cutoff(Y - p, self.cutoff, self.fs), period)
                    for Y, (_, p, period) in zip(y_list, views)]
-        self.input_scale_ = _rms([v for v, _, _ in views])
-        self.output_scale_ = _rms(targets)
+        self.input_scale_ = channel_rms([v for v, _, _ in views])
+        self.output_scale_ = channel_rms(targets)
         power = [np.mean(self._one_period(Y, period) ** 2, axis=0) for Y, (_, _, period) in zip(y_list, views)]
         signals = [(v / self.input_scale_, t / self.output_scale_,
                     self.output_scale_**2 / np.maximum(pw, np.finfo(float).tiny), period is not None)
@@ -233,20 +233,15 @@ class LRUAboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         """The content of the network's output above ``cutoff``: circularly
         over a period, else over the signal padded with as many zeros (a
         symmetric filter, its own adjoint)."""
-        n = out.shape[0]
-        nf = n if periodic else sfft.next_fast_len(2 * n, real=True)
-        spectrum = sfft.rfft(out, nf, axis=0, workers=-1)
-        spectrum[sfft.rfftfreq(nf, 1.0 / self.fs) <= self.cutoff] = 0.0
-        return sfft.irfft(spectrum, nf, axis=0, workers=-1)[:n]
+        n_fft = None if periodic else sfft.next_fast_len(2 * out.shape[0], real=True)
+        return above_cutoff(out, self.cutoff, self.fs, n_fft)
 
     def _view(self, U):
         """What the network reads along one signal (the input, its content
         above ``cutoff``, the regressor's simulation), over one period if
         the signal is periodic (its periods' mean); the simulation over the
         whole signal; and the period, or None."""
-        step = _state_space_step(self.regressor_)
-        period = step._period() if step._signal_is_periodic(U.shape[0]) else None
-        prediction = np.asarray(self.regressor_.predict(U)).reshape(U.shape[0], -1)
+        _, period, prediction = simulated(self.regressor_, U)
         view = np.hstack([U, above_cutoff(U, self.cutoff, self.fs), prediction])
         return self._one_period(view, period), prediction, period
 
@@ -286,9 +281,3 @@ class LRUAboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
             out.append(prediction + above)
         return restore_layout(out, layout, squeeze_1d=self._y_was_1d)
 
-
-def _rms(signals):
-    """The rms of each channel over signals (1 where it is zero)."""
-    scale = np.sqrt(np.mean(np.vstack(signals) ** 2, axis=0))
-    scale[scale == 0] = 1.0
-    return scale
