@@ -81,25 +81,62 @@ class _Signal(NamedTuple):
         return self.period is not None
 
 
-def _state_space_step(regressor):
-    """The step of a fitted regressor (or Pipeline) that simulates states."""
-    step = regressor.steps[-1][1] if hasattr(regressor, "steps") else regressor
-    if not hasattr(getattr(step, "model_", None), "normalised_trajectory"):
-        raise TypeError(
-            f"regressor: {type(step).__name__} has no state-space model to gate with; pass one of the "
-            "library's regressors (BLAEstimator, PNLSSRegressor, DecoupledPNLSSRegressor) or a Pipeline "
-            "ending in one."
-        )
-    return step
+def state_space_steps(regressor):
+    """The steps of a fitted regressor that simulate states: its own, a
+    Pipeline's last, or each member's of an :class:`AveragedRegressor`
+    (the members side by side are the mean's state-space model)."""
+    members = getattr(regressor, "estimators_", None)
+    steps = [r.steps[-1][1] if hasattr(r, "steps") else r for r in (members or [regressor])]
+    for step in steps:
+        if not hasattr(getattr(step, "model_", None), "normalised_trajectory"):
+            raise TypeError(
+                f"regressor: {type(step).__name__} has no state-space model to gate with; pass one of the "
+                "library's regressors (BLAEstimator, PNLSSRegressor, DecoupledPNLSSRegressor), a Pipeline "
+                "ending in one, or an AveragedRegressor of them."
+            )
+    return steps
+
+
+def state_space_n_params(regressor):
+    """The parameters of a fitted regressor's state-space models."""
+    return int(sum(step.n_params_ for step in state_space_steps(regressor)))
 
 
 def simulated(regressor, U):
-    """A fitted regressor's step that simulates states, the period it
+    """A fitted regressor's steps that simulate states, the period it
     simulates ``U`` with (None: from rest) and its simulation of ``U``
     (n_samples, n_outputs)."""
-    step = _state_space_step(regressor)
-    period = step._period() if step._signal_is_periodic(U.shape[0]) else None
-    return step, period, np.asarray(regressor.predict(U)).reshape(U.shape[0], -1)
+    steps = state_space_steps(regressor)
+    period = steps[0]._period() if steps[0]._signal_is_periodic(U.shape[0]) else None
+    return steps, period, np.asarray(regressor.predict(U)).reshape(U.shape[0], -1)
+
+
+def model_signal(regressor, U, cutoff, fs):
+    """One input signal ``U`` as a fitted regressor sees it (see
+    ``_Signal``): its simulation and states (each member's side by side),
+    the input split at ``cutoff``."""
+    steps, period, prediction = simulated(regressor, U)
+    states = np.hstack([step.model_.normalised_trajectory([U], period)[:, :-U.shape[1]] for step in steps])
+    input_above = above_cutoff(U, cutoff, fs)
+    return _Signal(prediction, states, input_above, U - input_above, period)
+
+
+def fit_state_gate(signals, residuals, above_band_rms, cutoff, fs):
+    """The gate of ``signals`` (``_Signal``) on the regressor's errors above
+    ``cutoff`` (``residuals``, their rms ``above_band_rms``): the states'
+    rms (the gate's units) and the coefficients of ``q``, fitted to the
+    errors' envelope over one period of the cutoff frequency."""
+    state_scale = channel_rms([s.states for s in signals])
+    window = max(1, int(round(fs / cutoff)))
+    envelopes = [envelope(r, above_band_rms, window, s.periodic) for s, r in zip(signals, residuals)]
+    coef = fit_gate([s.states for s in signals], envelopes, lambda x: quadratic_features(x / state_scale))
+    return state_scale, coef
+
+
+def gated_input(signal, state_scale, coef, cutoff, fs):
+    """The input of ``signal`` above ``cutoff``, switched on by the gate
+    (``fit_state_gate``) of its states, and kept above ``cutoff``."""
+    return above_cutoff(gate(signal.states / state_scale, coef)[:, None] * signal.input_above, cutoff, fs)
 
 
 def check_cutoff(estimator, y):
@@ -405,10 +442,8 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         signals = [self._signal(U) for U in X_list]
         residual = [above_cutoff(Y - s.prediction, self.cutoff, self.fs) for s, Y in zip(signals, y_list)]
         self.above_band_rms_ = np.sqrt(np.mean(np.vstack(residual) ** 2, axis=0))
-        self.state_scale_ = channel_rms([s.states for s in signals])
-        window = max(1, int(round(self.fs / self.cutoff)))  # one period of the cutoff frequency
-        envelopes = [envelope(r, self.above_band_rms_, window, s.periodic) for s, r in zip(signals, residual)]
-        self.gate_coef_ = fit_gate([s.states for s in signals], envelopes, self._features)
+        self.state_scale_, self.gate_coef_ = fit_state_gate(signals, residual, self.above_band_rms_, self.cutoff,
+                                                            self.fs)
         before_power = np.maximum(self.above_band_rms_ ** 2, np.finfo(float).tiny)
         if self.clearances is not None:
             motions = [self._motions(s) for s in signals]
@@ -449,7 +484,7 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
                 self.hidden_units, self.alpha_, self.n_networks, self.random_state, self.n_jobs)
             self.n_map_params_ = self.gate_coef_.size + sum(
                 w.size for network in self.networks_ for w in network.coefs_ + network.intercepts_)
-        self.n_params_ = _state_space_step(self.regressor_).n_params_ + self.n_map_params_
+        self.n_params_ = state_space_n_params(self.regressor_) + self.n_map_params_
         after = [r - self._apply_map(i, s.periodic) for s, i, r in zip(signals, inputs, residual)]
         self.explained_fraction_ = 1.0 - np.mean(np.vstack(after) ** 2, axis=0) / before_power
         return self
@@ -479,14 +514,7 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
 
     def _signal(self, U):
         """One input signal as the model sees it (see ``_Signal``)."""
-        step, period, prediction = simulated(self.regressor_, U)
-        states = step.model_.normalised_trajectory([U], period)[:, :-U.shape[1]]
-        input_above = above_cutoff(U, self.cutoff, self.fs)
-        return _Signal(prediction, states, input_above, U - input_above, period)
-
-    def _features(self, x):
-        """The gate's features: the scaled states' quadratic form."""
-        return quadratic_features(x / self.state_scale_)
+        return model_signal(self.regressor_, U, self.cutoff, self.fs)
 
     def _motions(self, signal):
         """The outputs' simulated motion in the band and each difference of
@@ -509,7 +537,7 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
 
     def _gated(self, signal):
         """The input above ``cutoff``, gated by the states (and kept above it)."""
-        return above_cutoff(self._gate(signal)[:, None] * signal.input_above, self.cutoff, self.fs)
+        return gated_input(signal, self.state_scale_, self.gate_coef_, self.cutoff, self.fs)
 
     def _ahead(self, w, signal):
         """``w`` read ``n_lead`` samples ahead: circularly on a periodic

@@ -21,12 +21,13 @@ from sklearn.base import BaseEstimator, clone
 from sklearn.utils import check_random_state
 from sklearn.utils.validation import check_is_fitted
 
-from ..utils.parameters import Interval, validates_parameters
+from ..utils.parameters import Interval, Options, validates_parameters
 from ..utils.validation import restore_layout, signal_layout, validate_signals
 from ._base import DynamicRegressorMixin
 from ._gated import above_cutoff, channel_rms
 from ._lru import LRUNetwork, fit_network
-from .above_band import _state_space_step, check_cutoff, simulated
+from .above_band import (check_cutoff, fit_state_gate, gated_input, model_signal, simulated,
+                         state_space_n_params)
 from .bla import BLAEstimator
 
 __all__ = ["LRUAboveBandRegressor"]
@@ -86,6 +87,25 @@ class LRUAboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
     burn_in : int, default=4096
         Samples at a segment's start left out of its error (the network's
         recursions settle from rest; at most half the segment).
+    gate : bool, default=True
+        Whether the input's content above ``cutoff`` reaches the network
+        switched on by a gate of the regressor's states (as
+        :class:`AboveBandRegressor`'s: ``max(q(x), 0)``, ``q`` quadratic in
+        the scaled states, fitted by least squares to where the regressor's
+        error above ``cutoff`` lies in time). Where the joint does not
+        knock, the force's content above the band then does not reach the
+        network, which would otherwise put it on the outputs. False: the
+        input's content above ``cutoff`` as it is.
+    loss : {"nrmse", "squared"}, default="nrmse"
+        What the network minimises over the training signals. "nrmse": the
+        mean over the signals and outputs of the NRMSE of the whole
+        simulation, as the field scores a model: the regressor's error in
+        the band, which the network leaves alone, and its error above
+        ``cutoff`` after the network (their powers add). Each output's
+        error then weighs by the inverse of its NRMSE: a gain on the outputs
+        and signals simulated best counts as much as the same relative gain
+        on the worst. "squared": the mean of the NRMSE squared above
+        ``cutoff``, where the worst-simulated outputs take the network.
     random_state : int, RandomState instance or None, default=None
         The network's initial weights and the segments drawn.
 
@@ -97,15 +117,20 @@ class LRUAboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         The fitted network (``network_.params``), in units of its scaled
         inputs and outputs.
     input_scale_ : ndarray of shape (2 * n_inputs + n_outputs,)
-        The training rms of the input, of its content above ``cutoff`` and
-        of the regressor's simulation: the network reads each divided by it.
+        The training rms of the input, of its content above ``cutoff``
+        (gated with ``gate``) and of the regressor's simulation: the
+        network reads each divided by it.
+    state_scale_ : ndarray of shape (n_states,)
+        The rms of each state on the training signals (the gate's units).
+        Only with ``gate``.
+    gate_coef_ : ndarray of shape (1 + n_states * (n_states + 1) // 2,)
+        The gate's coefficients (as :class:`AboveBandRegressor`'s). Only
+        with ``gate``.
     output_scale_ : ndarray of shape (n_outputs,)
         The rms of the regressor's training error above ``cutoff``: the
         network's output is in its units.
     loss_curve_ : ndarray of shape (max_iter,)
-        The training loss at each iteration: the mean over signals and
-        outputs of the error's power above ``cutoff`` over the output's
-        power (NRMSE squared), before the step.
+        The training loss (``loss``) at each iteration, before the step.
     n_iter_ : int
         The Adam iterations run (``max_iter``).
     explained_fraction_ : ndarray of shape (n_outputs,)
@@ -113,7 +138,8 @@ class LRUAboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         the network explains (periodic signals in steady state, the others
         from rest, whole).
     n_map_params_ : int
-        The network's weights (a complex one counts twice).
+        The network's weights (a complex one counts twice) and the gate's
+        coefficients.
     n_params_ : int
         The state-space model's parameters and ``n_map_params_``.
     n_features_in_, n_outputs_ : int
@@ -153,7 +179,7 @@ class LRUAboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
     >>> def error_above(m):  # NRMSE of the new record above the cutoff
     ...     return float(nrmse_by_band(y_new, m.predict(u_new), fs=1.0, edges=(0.1, 0.51))[0, 0])
     >>> round(error_above(model.regressor_), 4), round(error_above(model), 4)
-    (0.0121, 0.0083)
+    (0.0121, 0.0043)
     """
 
     _parameter_constraints = {
@@ -167,11 +193,13 @@ class LRUAboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         "learning_rate": [Interval(Real, 0, None, closed="neither")],
         "segment_length": [Interval(Integral, 2, None, closed="left")],
         "burn_in": [Interval(Integral, 0, None, closed="left")],
+        "gate": ["boolean"],
+        "loss": [Options(str, {"nrmse", "squared"})],
         "random_state": ["random_state"],
     }
 
     def __init__(self, regressor=None, *, cutoff=None, fs=1.0, width=32, n_layers=3, n_modes=64, max_iter=300,
-                 learning_rate=3e-3, segment_length=16384, burn_in=4096, random_state=None):
+                 learning_rate=3e-3, segment_length=16384, burn_in=4096, gate=True, loss="nrmse", random_state=None):
         self.regressor = regressor
         self.cutoff = cutoff
         self.fs = fs
@@ -182,6 +210,8 @@ class LRUAboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         self.learning_rate = learning_rate
         self.segment_length = segment_length
         self.burn_in = burn_in
+        self.gate = gate
+        self.loss = loss
         self.random_state = random_state
 
     @validates_parameters
@@ -207,15 +237,24 @@ class LRUAboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         self.n_outputs_ = y_list[0].shape[1]
         self._y_was_1d = signal_layout(y).kind == "1d"
 
-        views = [self._view(U) for U in X_list]
-        targets = [self._one_period(above_cutoff(Y - p, self.cutoff, self.fs), period)
-                   for Y, (_, p, period) in zip(y_list, views)]
+        model_signals = [None] * len(X_list)
+        if self.gate:
+            model_signals = [model_signal(self.regressor_, U, self.cutoff, self.fs) for U in X_list]
+            residual = [above_cutoff(Y - s.prediction, self.cutoff, self.fs) for s, Y in zip(model_signals, y_list)]
+            self.state_scale_, self.gate_coef_ = fit_state_gate(
+                model_signals, residual, np.sqrt(np.mean(np.vstack(residual) ** 2, axis=0)), self.cutoff, self.fs)
+        views = [self._view(U, s) for U, s in zip(X_list, model_signals)]
+        errors = [self._one_period(Y - p, period) for Y, (_, p, period) in zip(y_list, views)]
+        targets = [above_cutoff(e, self.cutoff, self.fs) for e in errors]
         self.input_scale_ = channel_rms([v for v, _, _ in views])
         self.output_scale_ = channel_rms(targets)
-        power = [np.mean(self._one_period(Y, period) ** 2, axis=0) for Y, (_, _, period) in zip(y_list, views)]
-        signals = [(v / self.input_scale_, t / self.output_scale_,
-                    self.output_scale_**2 / np.maximum(pw, np.finfo(float).tiny), period is not None)
-                   for (v, _, period), t, pw in zip(views, targets, power)]
+        power = [np.maximum(np.mean(self._one_period(Y, period) ** 2, axis=0), np.finfo(float).tiny)
+                 for Y, (_, _, period) in zip(y_list, views)]
+        # what the network leaves alone: the error in the band, each signal's and output's NRMSE squared
+        floors = [np.mean((e - t) ** 2, axis=0) / pw if self.loss == "nrmse" else None
+                  for e, t, pw in zip(errors, targets, power)]
+        signals = [(v / self.input_scale_, t / self.output_scale_, self.output_scale_**2 / pw, period is not None,
+                    floor) for (v, _, period), t, pw, floor in zip(views, targets, power, floors)]
         self.network_ = LRUNetwork(self.input_scale_.size, self.n_outputs_, self.width, self.n_layers, self.n_modes,
                                    np.random.default_rng(rng.randint(2**32)))
         self.loss_curve_ = fit_network(self.network_, signals, self.max_iter, self.learning_rate,
@@ -225,8 +264,8 @@ class LRUAboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         after = [t - self._network_output(v, period) for (v, _, period), t in zip(views, targets)]
         self.explained_fraction_ = 1.0 - (np.mean(np.vstack(after) ** 2, axis=0)
                                           / np.maximum(np.mean(np.vstack(targets) ** 2, axis=0), np.finfo(float).tiny))
-        self.n_map_params_ = self.network_.n_params
-        self.n_params_ = _state_space_step(self.regressor_).n_params_ + self.n_map_params_
+        self.n_map_params_ = self.network_.n_params + (self.gate_coef_.size if self.gate else 0)
+        self.n_params_ = state_space_n_params(self.regressor_) + self.n_map_params_
         return self
 
     def _above_cutoff(self, out, periodic):
@@ -236,14 +275,21 @@ class LRUAboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         n_fft = None if periodic else sfft.next_fast_len(2 * out.shape[0], real=True)
         return above_cutoff(out, self.cutoff, self.fs, n_fft)
 
-    def _view(self, U):
+    def _view(self, U, signal=None):
         """What the network reads along one signal (the input, its content
-        above ``cutoff``, the regressor's simulation), over one period if
-        the signal is periodic (its periods' mean); the simulation over the
-        whole signal; and the period, or None."""
-        _, period, prediction = simulated(self.regressor_, U)
-        view = np.hstack([U, above_cutoff(U, self.cutoff, self.fs), prediction])
-        return self._one_period(view, period), prediction, period
+        above ``cutoff``, gated with ``gate``, and the regressor's
+        simulation), over one period if the signal is periodic (its
+        periods' mean); the simulation over the whole signal; and the
+        period, or None. ``signal``: ``U`` as the regressor sees it
+        (``model_signal``), when already computed (with ``gate``)."""
+        if self.gate:
+            signal = model_signal(self.regressor_, U, self.cutoff, self.fs) if signal is None else signal
+            above, prediction, period = (gated_input(signal, self.state_scale_, self.gate_coef_, self.cutoff,
+                                                     self.fs), signal.prediction, signal.period)
+        else:
+            _, period, prediction = simulated(self.regressor_, U)
+            above = above_cutoff(U, self.cutoff, self.fs)
+        return self._one_period(np.hstack([U, above, prediction]), period), prediction, period
 
     @staticmethod
     def _one_period(signal, period):
