@@ -259,13 +259,12 @@ def nrmse_official(model, test):
 def prediction_from_rest(model, U):
     """A fitted model's simulation of one whole record ``U`` from rest, as
     ``nrmse_official`` scores it."""
+    base = getattr(model, "regressor_", None)
+    if base is not None:  # a map above the band: its part in steady state, on its model's from rest
+        return prediction_from_rest(base, U) + model.predict(U) - base.predict(U)
     if hasattr(model, "estimators_"):  # AveragedRegressor
         return np.mean([prediction_from_rest(member, U) for member in model.estimators_], axis=0)
-    base = getattr(model, "regressor_", model)
-    pred = base.model_.simulate(U, None)
-    if base is not model:
-        pred = pred + model.predict(U) - base.predict(U)
-    return pred
+    return model.model_.simulate(U, None)
 
 
 def out_of_band_floor(test):
@@ -374,10 +373,13 @@ def radius_at_rest(model):
     rest (of the state-space model inside a wrapper; of an average, its
     members' largest: their parallel connection has all their poles), or
     None for a model without one."""
+    base = getattr(model, "regressor_", None)
+    if base is not None:  # a wrapper: the state-space model inside
+        return radius_at_rest(base)
     if hasattr(model, "estimators_"):  # AveragedRegressor
         radii = [radius_at_rest(member) for member in model.estimators_]
         return None if None in radii else max(radii)
-    state_model = getattr(getattr(getattr(model, "regressor_", model), "model_", None), "normalised", None)
+    state_model = getattr(getattr(model, "model_", None), "normalised", None)
     return state_model.radius_at_rest() if hasattr(state_model, "radius_at_rest") else None
 
 

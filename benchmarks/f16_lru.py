@@ -2,26 +2,31 @@
 linear recurrent units (``LRUAboveBandRegressor``), trained on the
 estimation levels' multisines and sine sweeps (issue 35).
 
-    python benchmarks/f16_lru.py [--draws 0 1] [--data-dir DIR] [--output FILE]
+    python benchmarks/f16_lru.py [--draws 0 1] [--single 0] [--data-dir DIR] [--output FILE]
 
-For each draw of the random starts, ``bench_f16.py``'s best model of the
-band (``DecoupledPNLSSRegressor(18, n_branches=3, degree=5,
+The model of the band is ``bench_f16.py``'s best decoupled model
+(``DecoupledPNLSSRegressor(18, n_branches=3, degree=5,
 branch_basis="signed_powers", init="random")`` from the BLA of 18 states,
-fitted on the multisines of levels 1, 3, 5 and 7) is kept as it is
-(``FrozenEstimator``) and given its response above 15.5 Hz by
-``LRUAboveBandRegressor`` at its defaults (three layers of 64 recursions,
-32 channels, 300 Adam iterations; ``random_state`` the draw's): it reads
-the force, the force's content above the band and the model's simulation,
-and is fitted on the multisines (each its periods' mean, in steady state)
-and the estimation levels' sine sweeps (segments from rest). Nothing was
-chosen on the test levels: the settings are the class's defaults, set
-before any F-16 run of the numpy implementation.
+fitted on the multisines of levels 1, 3, 5 and 7), in two forms of one
+cost: for each of ``--draws`` the mean of two fits from one random start
+each (``AveragedRegressor``, the two fitted side by side on the two cores;
+draw ``k``'s members are seeded ``2k`` and ``2k + 1``), and for each of
+``--single`` one fit keeping the better of two starts (the model of
+``bench_f16.py``). It is kept as it is (``FrozenEstimator``) and given
+its response above 15.5 Hz by ``LRUAboveBandRegressor`` at its defaults
+(three layers of 64 recursions, 32 channels, 300 Adam iterations, the
+force above the band gated by the model's states, the loss the mean
+NRMSE of the whole simulation; ``random_state`` the draw's): it reads the
+force, the gated force above the band and the model's simulation, and is
+fitted on the multisines (each its periods' mean, in steady state) and the
+estimation levels' sine sweeps (segments from rest). Nothing was chosen on
+the test levels: the settings are the class's defaults.
 
 Each row holds the test multisines' NRMSE (periodic steady state), the test
 levels' sine sweeps (from rest), the fit time (the BLA's, the model's and
-the network's) and the parameter counts; then the mean of the draws'
-models. Writes ``results/f16_lru.json``; its ``best`` is the row of lowest
-mean test NRMSE fitted in under ten minutes.
+the network's) and the parameter counts; then the mean of the averaged
+draws' models. Writes ``results/f16_lru.json``; its ``best`` is the row of
+lowest mean test NRMSE fitted in under ten minutes.
 """
 import argparse
 import sys
@@ -35,61 +40,86 @@ from f16_clearances import (BASIS, BRANCHES, DEGREE, STATES, MeanOfMembers, load
                             map_signals)
 
 
-def draw_rows(seed, start, start_s, X, y, train_sweeps, test):
+def draw_rows(name, settings, model, start, start_s, X, y, train_sweeps, test, seed):
     """The rows of one draw (the model of the band alone, then with the
     network above it) and the network's model with its own fit time."""
     from sklearn.frozen import FrozenEstimator
 
     from sklearn_pnlss import LRUAboveBandRegressor
 
-    decoupled = bench_f16.decoupled_estimator(STATES, BRANCHES, DEGREE, branch_basis=BASIS, random_state=seed)
     t0 = time.perf_counter()
-    decoupled.fit(start.transform(X), y)
+    model.fit(start.transform(X), y)
     model_s = time.perf_counter() - t0
-    inside = f"DecoupledPNLSSRegressor({STATES}, {BRANCHES}, {DEGREE}, {BASIS}) random, random_state={seed}"
-    settings = {"n_states": STATES, "n_branches": BRANCHES, "degree": DEGREE, "branch_basis": BASIS,
-                "random_state": seed}
-    rows = [bench_f16.entry(inside, settings, decoupled, test, start_s + model_s)]
+    rows = [bench_f16.entry(name, settings, model, test, start_s + model_s)]
     t0 = time.perf_counter()
-    network = LRUAboveBandRegressor(FrozenEstimator(decoupled), cutoff=bench_f16.BAND_EDGES[1], fs=400.0,
+    network = LRUAboveBandRegressor(FrozenEstimator(model), cutoff=bench_f16.BAND_EDGES[1], fs=400.0,
                                     random_state=seed).fit(*map_signals(X, y, train_sweeps, True))
     network_s = time.perf_counter() - t0
     params = network.get_params(deep=False)
     named = {k: params[k] for k in ("width", "n_layers", "n_modes", "max_iter", "learning_rate", "segment_length",
-                                    "burn_in")}
+                                    "burn_in", "gate", "loss")}
     extra = {"n_above_band_params": int(network.n_map_params_), "network_fit_s": network_s,
              "above_band_explained_train": network.explained_fraction_.tolist(),
              "loss_first_last": [float(network.loss_curve_[0]), float(network.loss_curve_[-1])]}
-    rows.append(bench_f16.entry(f"LRUAboveBandRegressor({inside})",
+    rows.append(bench_f16.entry(f"LRUAboveBandRegressor({name})",
                                 {**settings, "cutoff_hz": network.cutoff, "train_sweeps": True, **named},
                                 network, test, start_s + model_s + network_s, extra))
     return rows, (network, model_s + network_s)
 
 
+def averaged(seed):
+    """Draw ``seed``'s model of the band: the mean of two fits from one
+    random start each, seeded ``2 seed`` and ``2 seed + 1``, fitted side by
+    side."""
+    from sklearn_pnlss import AveragedRegressor
+
+    member = bench_f16.decoupled_estimator(STATES, BRANCHES, DEGREE, branch_basis=BASIS, n_init=1)
+    name = f"AveragedRegressor(2 x DecoupledPNLSSRegressor({STATES}, {BRANCHES}, {DEGREE}, {BASIS}) random, n_init=1)"
+    settings = {"n_states": STATES, "n_branches": BRANCHES, "degree": DEGREE, "branch_basis": BASIS, "n_init": 1,
+                "n_estimators": 2, "random_state": 2 * seed}
+    return name, settings, AveragedRegressor(member.set_params(n_jobs=1), n_estimators=2, n_jobs=2,
+                                             random_state=2 * seed)
+
+
+def single(seed):
+    """The better of two starts of one fit (``bench_f16.py``'s model)."""
+    name = f"DecoupledPNLSSRegressor({STATES}, {BRANCHES}, {DEGREE}, {BASIS}) random, random_state={seed}"
+    settings = {"n_states": STATES, "n_branches": BRANCHES, "degree": DEGREE, "branch_basis": BASIS, "n_init": 2,
+                "random_state": seed}
+    return name, settings, bench_f16.decoupled_estimator(STATES, BRANCHES, DEGREE, branch_basis=BASIS,
+                                                         random_state=seed)
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--data-dir", default=bench_f16.DEFAULT_DATA)
-    parser.add_argument("--draws", type=int, nargs="+", default=[0, 1])
+    parser.add_argument("--draws", type=int, nargs="*", default=[0, 1],
+                        help="the averaged models' draws")
+    parser.add_argument("--single", type=int, nargs="*", default=[0],
+                        help="the single fits' draws (the better of two starts)")
     parser.add_argument("--output", default=RESULTS / "f16_lru.json")
     args = parser.parse_args(argv)
 
     X, y, test, train_sweeps, start, start_s = load_and_start(args.data_dir)
     results = {**header(), "protocol": {"train_levels": bench_f16.TRAIN_LEVELS, "test_levels": bench_f16.TEST_LEVELS},
-               "published": bench_f16.PUBLISHED, "start_s": start_s, "draws": [], "averages": []}
+               "published": bench_f16.PUBLISHED, "start_s": start_s, "draws": [], "single": [], "averages": []}
     members = {}
-    for seed in args.draws:
-        print(f"draw {seed}", flush=True)
-        rows, members[seed] = draw_rows(seed, start, start_s, X, y, train_sweeps, test)
-        results["draws"].append({"random_state": seed, "rows": rows})
-        write_results(results, args.output)
+    for kind, seeds, model_of in (("draws", args.draws, averaged), ("single", args.single, single)):
+        for seed in seeds:
+            print(f"{kind}: draw {seed}", flush=True)
+            rows, network = draw_rows(*model_of(seed), start, start_s, X, y, train_sweeps, test, seed)
+            results[kind].append({"random_state": seed, "rows": rows})
+            if kind == "draws":
+                members[seed] = network
+            write_results(results, args.output)
     seeds = list(members)
     for k in range(2, len(seeds) + 1):
         chosen = seeds[:k]
         results["averages"].append(bench_f16.entry(
             f"mean of draws {chosen}: LRUAboveBandRegressor", {"draws": chosen},
             MeanOfMembers([members[s][0] for s in chosen]), test, start_s + sum(members[s][1] for s in chosen)))
-    results["best"] = bench_f16.best_within_budget([row for d in results["draws"] for row in d["rows"]]
-                                                   + results["averages"])
+    results["best"] = bench_f16.best_within_budget([row for kind in ("draws", "single") for d in results[kind]
+                                                    for row in d["rows"]] + results["averages"])
     write_results(results, args.output)
 
 

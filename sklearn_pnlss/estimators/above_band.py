@@ -167,10 +167,11 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
     Parameters
     ----------
     regressor : estimator or None, default=None
-        One of the library's regressors, or a Pipeline ending in one (its
-        states set the gate); None fits ``BLAEstimator()``. Cloned at fit;
-        wrap a fitted model in :class:`sklearn.frozen.FrozenEstimator` to
-        keep it as it is.
+        One of the library's regressors, a Pipeline ending in one, or an
+        :class:`AveragedRegressor` of them (its states set the gate; an
+        average's are its members' side by side); None fits
+        ``BLAEstimator()``. Cloned at fit; wrap a fitted model in
+        :class:`sklearn.frozen.FrozenEstimator` to keep it as it is.
     cutoff : float or None, default=None
         The highest frequency the input excites, in the units of ``fs``:
         the content above it is modelled. Required.

@@ -61,9 +61,11 @@ class LRUAboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
     Parameters
     ----------
     regressor : estimator or None, default=None
-        One of the library's regressors, or a Pipeline ending in one; None
-        fits ``BLAEstimator()``. Cloned at fit; wrap a fitted model in
-        :class:`sklearn.frozen.FrozenEstimator` to keep it as it is.
+        One of the library's regressors, a Pipeline ending in one, or an
+        :class:`AveragedRegressor` of them (the gate then reads every
+        member's states); None fits ``BLAEstimator()``. Cloned at fit; wrap
+        a fitted model in :class:`sklearn.frozen.FrozenEstimator` to keep it
+        as it is.
     cutoff : float or None, default=None
         The highest frequency the input excites, in the units of ``fs``:
         the content above it is modelled. Required.
