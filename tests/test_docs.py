@@ -449,10 +449,11 @@ def _clearances_mean(k, route):
                 if r["model"]["route"] == route and len(r["model"]["draws"]) == k)
 
 
-def _lru(seed, network=True):
-    """f16_lru.py: one draw's row, with the network above the band or the
-    model alone."""
-    rows = next(d["rows"] for d in _results("f16_lru")["draws"] if d["random_state"] == seed)
+def _lru(seed, network=True, kind="draws"):
+    """f16_lru.py: one draw's row (``kind``: "draws", the mean of two
+    single-start fits; "single", the better of two starts), with the
+    network above the band or the model alone."""
+    rows = next(d["rows"] for d in _results("f16_lru")[kind] if d["random_state"] == seed)
     return next(r for r in rows if r["model"]["estimator"].startswith("LRUAboveBandRegressor") == network)
 
 
@@ -1599,35 +1600,37 @@ FIGURES = [
                     _clearances_mean(3, HINGES)["mean_nrmse"], _clearances_mean(3, HINGES)["mean_nrmse_sweeps"],
                     _clearances_mean(3, HINGES)["fit_s"]]),
     Figure(R, "gives the output above 15.5 Hz through three residual layers of 64 linear recurrent units (stable "
-              "complex first-order recursions) between 32 channels, 28707 weights", LRU,
-           lambda: [_lru(0)["model"]["cutoff_hz"], _lru(0)["model"]["n_modes"], _lru(0)["model"]["width"],
-                    _lru(0)["n_above_band_params"]]),
-    Figure(R, "On the first draw it takes the test multisines to 0.140 and the sweeps to 0.218 (the model alone: "
-              "0.173 and 0.247), fitted in 524 s with the model (the network 351 s, 300 iterations); on the second "
-              "to 0.137 and 0.235 in 534 s (level 6: 0.121 / 0.108 / 0.236, the drive point and the payload below "
-              "the deep LRU's 0.134 and 0.237)", LRU,
-           lambda: [_lru(0)["mean_nrmse"], _lru(0)["mean_nrmse_sweeps"], _lru(0, False)["mean_nrmse"],
-                    _lru(0, False)["mean_nrmse_sweeps"], _lru(0)["fit_s"], _lru(0)["network_fit_s"],
-                    _lru(0)["model"]["max_iter"], _lru(1)["mean_nrmse"], _lru(1)["mean_nrmse_sweeps"],
-                    _lru(1)["fit_s"], 6, *_lru(1)["nrmse"]["6"],
-                    *[next(v["level 6"] for v in _results("f16_lru")["published"].values() if "level 6" in v)[k]
-                      for k in (0, 2)]]),
-    Figure(R, "The mean of the two reaches 0.130 (level 6: 0.117 / 0.105 / 0.229; sweeps 0.208), but in 1050 s. The "
-              "wing stays above the deep LRU's 0.099 on level 6, and level 2 pays", LRU,
-           lambda: [_results("f16_lru")["averages"][0]["mean_nrmse"], 6,
+              "complex first-order recursions) between 32 channels", LRU,
+           lambda: [_lru(0)["model"]["cutoff_hz"], _lru(0)["model"]["n_modes"], _lru(0)["model"]["width"]]),
+    Figure(R, "fitted side by side on the two cores (`AveragedRegressor`: 205 s with the linear start, against "
+              "180 s for one fit keeping the better of two starts). On the first draw the test multisines go to 0.127 (level 6: 0.112 / "
+              "0.0992 / 0.225, the drive point and the payload below the deep LRU's 0.134 and 0.237, the wing level "
+              "with its 0.099 at the published precision) and the sweeps to 0.205, fitted in 531 s (the network 325 "
+              "s, 300 iterations)", LRU,
+           lambda: [_lru(0, False)["fit_s"], _lru(0, False, "single")["fit_s"], _lru(0)["mean_nrmse"], 6,
+                    *_lru(0)["nrmse"]["6"][:1], round(_lru(0)["nrmse"]["6"][1], 4), _lru(0)["nrmse"]["6"][2],
+                    *[_f16_lru_level_6()[k] for k in (0, 2, 1)], _lru(0)["mean_nrmse_sweeps"], _lru(0)["fit_s"],
+                    _lru(0)["network_fit_s"], _lru(0)["model"]["max_iter"]]),
+    Figure(R, "The second draw reaches 0.137 (level 6: 0.115 / 0.105 / 0.226), its model of the band worse on level "
+              "4 (0.178 alone, against 0.168); one fit with the better of two starts and the same network, 0.134 in "
+              "487 s", LRU,
+           lambda: [_lru(1)["mean_nrmse"], 6, *_lru(1)["nrmse"]["6"], 4, _lru(1, False)["mean_nrmse"],
+                    _lru(0, False)["mean_nrmse"], _lru(0, kind="single")["mean_nrmse"],
+                    _lru(0, kind="single")["fit_s"]]),
+    Figure(R, "The mean of the two draws reaches 0.1255 (level 6: 0.108 / 0.097 / 0.212, every output below the deep "
+              "LRU's; sweeps 0.187), but in 1023 s. Level 2, where the joint does not knock, keeps its figures "
+              "(0.089 / 0.109 / 0.113 on the first draw, the model alone 0.089 / 0.110 / 0.113)", LRU,
+           lambda: [round(_results("f16_lru")["averages"][0]["mean_nrmse"], 4), 6,
                     *_results("f16_lru")["averages"][0]["nrmse"]["6"],
                     _results("f16_lru")["averages"][0]["mean_nrmse_sweeps"],
-                    _results("f16_lru")["averages"][0]["fit_s"],
-                    next(v["level 6"] for v in _results("f16_lru")["published"].values() if "level 6" in v)[1], 6,
-                    2]),
-    Figure(R, "the drive point's error above the band 0.047 against 0.016 without it, on the first draw", LRU,
-           lambda: [math.sqrt(sum(band[0] ** 2 for band in r["nrmse_by_band"]["2"][1:]))
-                    for r in (_lru(0), _lru(0, False))]),
-    Figure(R, "| the same model of 18 states (second draw of its starts) with a deep network of linear recurrent "
-              "units above the band (`LRUAboveBandRegressor`, `benchmarks/f16_lru.py`; 28707 more weights) | 126 | "
-              "0.137 | 534 s |", LRU,
-           lambda: [_lru(1)["model"]["n_states"], _lru(1)["n_above_band_params"], _lru(1, False)["n_nonlinear_params"],
-                    _lru(1)["mean_nrmse"], _lru(1)["fit_s"]]),
+                    _results("f16_lru")["averages"][0]["fit_s"], 2, *_lru(0)["nrmse"]["2"],
+                    *_lru(0, False)["nrmse"]["2"]]),
+    Figure(R, "| the mean of two single-start fits of that decoupled model (`AveragedRegressor`, fitted side by side) "
+              "with a deep network of linear recurrent units above the band (`LRUAboveBandRegressor`, "
+              "`benchmarks/f16_lru.py`; 29374 more weights and gate coefficients) | 252 | 0.127 | 531 s |", LRU,
+           lambda: [_lru(0)["n_above_band_params"],
+                    _lru(0)["model"]["n_estimators"] * _lru(0, False, "single")["n_nonlinear_params"],
+                    _lru(0)["mean_nrmse"], _lru(0)["fit_s"]]),
     Figure(R, "six layers of 100 states", "Forgione et al., CDC 2024, the case study", lambda: [None]),
     Figure(R, "It has 51 nonlinear parameters where the full model in the states and input has 90 "
               "(the states-only model above: 48)", "the models' structure",
@@ -2250,10 +2253,10 @@ def test_the_f16_best_is_the_readme_row_and_was_fitted_within_ten_minutes():
 
 
 def test_the_f16_lru_best_is_the_readme_row_and_the_lowest_within_ten_minutes():
-    """The README says the second draw with the network above the band is
+    """The README says the first draw with the network above the band is
     the best F-16 model of the benchmarks fitted in under ten minutes."""
     best = _results("f16_lru")["best"]
-    assert best == _lru(1)
+    assert best == _lru(0)
     assert best["fit_s"] < 600.0
     assert best["mean_nrmse"] < _results("f16_clearances")["best"]["mean_nrmse"]
     assert {"model", "mean_nrmse", "nrmse", "fit_s", "peak_memory_mb"} <= best.keys()
