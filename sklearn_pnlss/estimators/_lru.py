@@ -333,6 +333,8 @@ def fit_network(network, signals, n_iter, learning_rate, segment_length, burn_in
     None. Returns the loss at each iteration."""
     adam = _Adam(network.params)
     losses = []
+    with_floor = signals[0][4] is not None
+    n_terms = len(signals) * signals[0][1].shape[1]
     for lr, beta1 in one_cycle(n_iter, learning_rate):
         batches = {}
         for inputs, target, weights, periodic, floor in signals:
@@ -344,16 +346,15 @@ def fit_network(network, signals, n_iter, learning_rate, segment_length, burn_in
             scored = np.ones((stop - start, 1))
             scored[:skip] = 0.0
             piece = (inputs[start:stop], target[start:stop], weights * scored / np.sum(scored),
-                     np.zeros(target.shape[1]) if floor is None else floor)
+                     floor if with_floor else np.zeros(target.shape[1]))
             batches.setdefault((periodic, stop - start), []).append(piece)
         total, grads = 0.0, None
-        n_terms = len(signals) * signals[0][1].shape[1]
         for (periodic, _), pieces in batches.items():
             inputs, target, weights, floor = (np.stack(part) for part in zip(*pieces))
             out = network.forward(inputs, periodic, keep=True)
             if project is not None:
                 out = np.stack([project(o, periodic) for o in out])
-            loss, g = batch_loss(out - target, weights, None if signals[0][4] is None else floor)
+            loss, g = batch_loss(out - target, weights, floor if with_floor else None)
             total += loss / n_terms
             g /= n_terms
             if project is not None:
