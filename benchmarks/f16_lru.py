@@ -67,6 +67,11 @@ def draw_rows(name, settings, model, start, start_s, X, y, train_sweeps, test, s
     return rows, (network, model_s + network_s)
 
 
+# the decoupled model of the band, as its rows name it and record its settings
+DECOUPLED = f"DecoupledPNLSSRegressor({STATES}, {BRANCHES}, {DEGREE}, {BASIS}) random"
+DECOUPLED_SETTINGS = {"n_states": STATES, "n_branches": BRANCHES, "degree": DEGREE, "branch_basis": BASIS}
+
+
 def averaged(seed):
     """Draw ``seed``'s model of the band: the mean of two fits from one
     random start each, seeded ``2 seed`` and ``2 seed + 1``, fitted side by
@@ -74,18 +79,16 @@ def averaged(seed):
     from sklearn_pnlss import AveragedRegressor
 
     member = bench_f16.decoupled_estimator(STATES, BRANCHES, DEGREE, branch_basis=BASIS, n_init=1)
-    name = f"AveragedRegressor(2 x DecoupledPNLSSRegressor({STATES}, {BRANCHES}, {DEGREE}, {BASIS}) random, n_init=1)"
-    settings = {"n_states": STATES, "n_branches": BRANCHES, "degree": DEGREE, "branch_basis": BASIS, "n_init": 1,
-                "n_estimators": 2, "random_state": 2 * seed}
+    name = f"AveragedRegressor(2 x {DECOUPLED}, n_init=1)"
+    settings = {**DECOUPLED_SETTINGS, "n_init": 1, "n_estimators": 2, "random_state": 2 * seed}
     return name, settings, AveragedRegressor(member.set_params(n_jobs=1), n_estimators=2, n_jobs=2,
                                              random_state=2 * seed)
 
 
 def single(seed):
     """The better of two starts of one fit (``bench_f16.py``'s model)."""
-    name = f"DecoupledPNLSSRegressor({STATES}, {BRANCHES}, {DEGREE}, {BASIS}) random, random_state={seed}"
-    settings = {"n_states": STATES, "n_branches": BRANCHES, "degree": DEGREE, "branch_basis": BASIS, "n_init": 2,
-                "random_state": seed}
+    name = f"{DECOUPLED}, random_state={seed}"
+    settings = {**DECOUPLED_SETTINGS, "n_init": 2, "random_state": seed}
     return name, settings, bench_f16.decoupled_estimator(STATES, BRANCHES, DEGREE, branch_basis=BASIS,
                                                          random_state=seed)
 

@@ -121,16 +121,18 @@ def model_signal(regressor, U, cutoff, fs):
     return _Signal(prediction, states, input_above, U - input_above, period)
 
 
-def fit_state_gate(signals, residuals, above_band_rms, cutoff, fs):
+def fit_state_gate(signals, residuals, cutoff, fs):
     """The gate of ``signals`` (``_Signal``) on the regressor's errors above
-    ``cutoff`` (``residuals``, their rms ``above_band_rms``): the states'
-    rms (the gate's units) and the coefficients of ``q``, fitted to the
-    errors' envelope over one period of the cutoff frequency."""
+    ``cutoff`` (``residuals``): the errors' rms per output, the states' rms
+    (the gate's units) and the coefficients of ``q``, fitted to the errors'
+    envelope (in units of their rms) over one period of the cutoff
+    frequency."""
+    above_band_rms = np.sqrt(np.mean(np.vstack(residuals) ** 2, axis=0))
     state_scale = channel_rms([s.states for s in signals])
     window = max(1, int(round(fs / cutoff)))
     envelopes = [envelope(r, above_band_rms, window, s.periodic) for s, r in zip(signals, residuals)]
     coef = fit_gate([s.states for s in signals], envelopes, lambda x: quadratic_features(x / state_scale))
-    return state_scale, coef
+    return above_band_rms, state_scale, coef
 
 
 def gated_input(signal, state_scale, coef, cutoff, fs):
@@ -442,9 +444,8 @@ class AboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
 
         signals = [self._signal(U) for U in X_list]
         residual = [above_cutoff(Y - s.prediction, self.cutoff, self.fs) for s, Y in zip(signals, y_list)]
-        self.above_band_rms_ = np.sqrt(np.mean(np.vstack(residual) ** 2, axis=0))
-        self.state_scale_, self.gate_coef_ = fit_state_gate(signals, residual, self.above_band_rms_, self.cutoff,
-                                                            self.fs)
+        self.above_band_rms_, self.state_scale_, self.gate_coef_ = fit_state_gate(signals, residual, self.cutoff,
+                                                                                  self.fs)
         before_power = np.maximum(self.above_band_rms_ ** 2, np.finfo(float).tiny)
         if self.clearances is not None:
             motions = [self._motions(s) for s in signals]

@@ -245,8 +245,7 @@ class LRUAboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         if self.gate:
             model_signals = [model_signal(self.regressor_, U, self.cutoff, self.fs) for U in X_list]
             residual = [above_cutoff(Y - s.prediction, self.cutoff, self.fs) for s, Y in zip(model_signals, y_list)]
-            self.state_scale_, self.gate_coef_ = fit_state_gate(
-                model_signals, residual, np.sqrt(np.mean(np.vstack(residual) ** 2, axis=0)), self.cutoff, self.fs)
+            _, self.state_scale_, self.gate_coef_ = fit_state_gate(model_signals, residual, self.cutoff, self.fs)
         views = [self._view(U, s) for U, s in zip(X_list, model_signals)]
         errors = [self._one_period(Y - p, period) for Y, (_, p, period) in zip(y_list, views)]
         targets = [above_cutoff(e, self.cutoff, self.fs) for e in errors]
