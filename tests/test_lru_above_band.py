@@ -111,7 +111,7 @@ def test_explains_the_rattle_on_a_new_record():
     np.testing.assert_allclose(nrmse_by_band(y_new, model.predict(u_new), fs=1.0, edges=in_band),
                                nrmse_by_band(y_new, alone.predict(u_new), fs=1.0, edges=in_band), rtol=2e-3)
     for k in range(model.n_layers):
-        assert np.abs(model.network_.eigenvalues(k)).max() < 1.0
+        assert np.abs(model.networks_[0].eigenvalues(k)).max() < 1.0
     assert model.loss_curve_.shape == (200,) and model.explained_fraction_[0] > 0.5
     assert model.n_params_ == model.regressor_.n_params_ + model.n_map_params_
 
@@ -204,10 +204,10 @@ def test_the_gate_shuts_the_force_above_the_band_at_small_motion():
         return np.sqrt(np.mean(view[:, 1] ** 2) / np.mean(fast(u[:, 0], 0.1) ** 2))
 
     assert passed(0.3 * u_new) < 0.1 * passed(u_new)
-    assert model.n_map_params_ == model.network_.n_params + model.gate_coef_.size == model.network_.n_params + 4
+    assert model.n_map_params_ == model.networks_[0].n_params + model.gate_coef_.size == model.networks_[0].n_params + 4
     ungated = LRUAboveBandRegressor(BLAEstimator(2, fs=1.0), cutoff=0.1, width=4, n_layers=1, n_modes=4, max_iter=2,
                                     gate=False, random_state=0).fit(u, y)
-    assert not hasattr(ungated, "gate_coef_") and ungated.n_map_params_ == ungated.network_.n_params
+    assert not hasattr(ungated, "gate_coef_") and ungated.n_map_params_ == ungated.networks_[0].n_params
 
 
 def test_an_averaged_model_gates_with_its_members_states_side_by_side():
@@ -221,3 +221,28 @@ def test_an_averaged_model_gates_with_its_members_states_side_by_side():
     assert model.n_params_ == sum(m.n_params_ for m in model.regressor_.estimators_) + model.n_map_params_
     _, prediction, _ = model._view(u1)
     np.testing.assert_allclose(prediction, model.regressor_.predict(u1))
+
+
+def test_several_networks_are_averaged_and_reproducible_whatever_n_jobs():
+    """``n_networks`` networks: the first is the one network's of the same
+    ``random_state``, the prediction their mean, and fitting two in worker
+    processes gives the same networks as fitting them here."""
+    rng = np.random.default_rng(9)
+    (u1, y1), (u2, y2), (u_new, _) = (knocking_record(rng) for _ in range(3))
+    settings = dict(cutoff=0.1, width=4, n_layers=1, n_modes=4, max_iter=20, segment_length=2048, burn_in=128,
+                    random_state=0)
+    one = LRUAboveBandRegressor(BLAEstimator(2, fs=1.0), **settings).fit([u1, u2], [y1, y2])
+    here = LRUAboveBandRegressor(BLAEstimator(2, fs=1.0), n_networks=2, **settings).fit([u1, u2], [y1, y2])
+    workers = clone(here).set_params(n_jobs=2).fit([u1, u2], [y1, y2])
+    for name, value in one.networks_[0].params.items():
+        np.testing.assert_array_equal(here.networks_[0].params[name], value)
+        assert not np.allclose(here.networks_[1].params[name], value) or name.startswith("ln_")
+        for k in range(2):
+            np.testing.assert_array_equal(workers.networks_[k].params[name], here.networks_[k].params[name])
+    assert here.n_map_params_ == 2 * one.networks_[0].n_params + one.gate_coef_.size
+    second = clone(one)
+    second.__dict__.update(one.__dict__)
+    second.networks_ = here.networks_[1:]
+    alone = one.regressor_.predict(u_new)
+    np.testing.assert_allclose(here.predict(u_new) - alone,
+                               0.5 * (one.predict(u_new) - alone + second.predict(u_new) - alone), atol=1e-9)  # float32

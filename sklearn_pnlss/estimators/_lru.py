@@ -19,10 +19,12 @@ without notice.
 """
 import math
 
+import numba
 import numpy as np
+from joblib import Parallel, cpu_count, delayed, effective_n_jobs
 from numba import njit, prange
 
-__all__ = ["LRUNetwork", "batch_loss", "fit_network", "one_cycle"]
+__all__ = ["LRUNetwork", "batch_loss", "fit_network", "fit_networks", "one_cycle"]
 
 # modes a loop carries side by side: independent chains of products the processor overlaps
 _CHAINS = 8
@@ -367,3 +369,26 @@ def fit_network(network, signals, n_iter, learning_rate, segment_length, burn_in
         adam.step(network.params, grads, lr, beta1)
         losses.append(total)
     return np.array(losses)
+
+
+def fit_networks(settings, signals, training, seeds, project, n_jobs=None):
+    """One network ``LRUNetwork(*settings, rng)`` fitted by
+    :func:`fit_network` (``signals``, ``training`` = (n_iter,
+    learning_rate, segment_length, burn_in), ``project``) for each pair of
+    ``seeds`` (its initial weights', its segments'), ``n_jobs`` at a time,
+    each in a process of its own with its share of the cores. Returns the
+    (network, losses) pairs in the order of ``seeds``."""
+    n_workers = min(effective_n_jobs(n_jobs), len(seeds))
+    if n_workers == 1:  # here, with every core for its products and recursions
+        return [_fit_one(settings, signals, training, pair, project) for pair in seeds]
+    threads = max(1, cpu_count() // n_workers)
+    return Parallel(n_jobs=n_workers)(delayed(_fit_one)(settings, signals, training, pair, project, threads)
+                                      for pair in seeds)
+
+
+def _fit_one(settings, signals, training, seeds, project, threads=None):
+    if threads is not None:  # a worker: the compiled kernels' threads too (joblib limits BLAS's)
+        numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+    network = LRUNetwork(*settings, np.random.default_rng(seeds[0]))
+    losses = fit_network(network, signals, *training, np.random.default_rng(seeds[1]), project)
+    return network, losses
