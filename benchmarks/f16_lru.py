@@ -2,7 +2,7 @@
 linear recurrent units (``LRUAboveBandRegressor``), trained on the
 estimation levels' multisines and sine sweeps (issue 35).
 
-    python benchmarks/f16_lru.py [--draws 0 1] [--single 0] [--data-dir DIR] [--output FILE]
+    python benchmarks/f16_lru.py [--draws 0 1 2] [--single 0] [--data-dir DIR] [--output FILE]
 
 The model of the band is ``bench_f16.py``'s best decoupled model
 (``DecoupledPNLSSRegressor(18, n_branches=3, degree=5,
@@ -16,11 +16,14 @@ draw ``k``'s members are seeded ``2k`` and ``2k + 1``), and for each of
 its response above 15.5 Hz by ``LRUAboveBandRegressor`` at its defaults
 (three layers of 64 recursions, 32 channels, 300 Adam iterations, the
 force above the band gated by the model's states, the loss the mean
-NRMSE of the whole simulation; ``random_state`` the draw's): it reads the
-force, the gated force above the band and the model's simulation, and is
-fitted on the multisines (each its periods' mean, in steady state) and the
-estimation levels' sine sweeps (segments from rest). Nothing was chosen on
-the test levels: the settings are the class's defaults.
+NRMSE of the whole simulation; ``random_state`` the draw's) but for
+``n_networks=2``: two networks from different seeds, averaged, fitted
+side by side on the two cores in the time of one. Each reads the force,
+the gated force above the band and the model's simulation, and is fitted
+on the multisines (each its periods' mean, in steady state) and the
+estimation levels' sine sweeps (segments from rest). Nothing was chosen
+on the test levels but the number of networks (two: what the two cores
+fit in the time of one).
 
 Each row holds the test multisines' NRMSE (periodic steady state), the test
 levels' sine sweeps (from rest), the fit time (the BLA's, the model's and
@@ -53,11 +56,12 @@ def draw_rows(name, settings, model, start, start_s, X, y, train_sweeps, test, s
     rows = [bench_f16.entry(name, settings, model, test, start_s + model_s)]
     t0 = time.perf_counter()
     network = LRUAboveBandRegressor(FrozenEstimator(model), cutoff=bench_f16.BAND_EDGES[1], fs=400.0,
+                                    n_networks=N_NETWORKS, n_jobs=N_NETWORKS,
                                     random_state=seed).fit(*map_signals(X, y, train_sweeps, True))
     network_s = time.perf_counter() - t0
     params = network.get_params(deep=False)
     named = {k: params[k] for k in ("width", "n_layers", "n_modes", "max_iter", "learning_rate", "segment_length",
-                                    "burn_in", "gate", "loss")}
+                                    "burn_in", "gate", "loss", "n_networks")}
     extra = {"n_above_band_params": int(network.n_map_params_), "network_fit_s": network_s,
              "above_band_explained_train": network.explained_fraction_.tolist(),
              "loss_first_last": [float(network.loss_curve_[0]), float(network.loss_curve_[-1])]}
@@ -67,6 +71,8 @@ def draw_rows(name, settings, model, start, start_s, X, y, train_sweeps, test, s
     return rows, (network, model_s + network_s)
 
 
+# networks averaged above the band, fitted side by side (one on each core)
+N_NETWORKS = 2
 # the decoupled model of the band, as its rows name it and record its settings
 DECOUPLED = f"DecoupledPNLSSRegressor({STATES}, {BRANCHES}, {DEGREE}, {BASIS}) random"
 DECOUPLED_SETTINGS = {"n_states": STATES, "n_branches": BRANCHES, "degree": DEGREE, "branch_basis": BASIS}
@@ -96,7 +102,7 @@ def single(seed):
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--data-dir", default=bench_f16.DEFAULT_DATA)
-    parser.add_argument("--draws", type=int, nargs="*", default=[0, 1],
+    parser.add_argument("--draws", type=int, nargs="*", default=[0, 1, 2],
                         help="the averaged models' draws")
     parser.add_argument("--single", type=int, nargs="*", default=[0],
                         help="the single fits' draws (the better of two starts)")
