@@ -130,8 +130,20 @@ SELECT_KNOTS = (None, 8)
 
 
 def peak_memory_mb():
-    """Peak resident memory of this process so far (MB)."""
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    """Peak resident memory so far (MB) of this process and its worker
+    processes (joblib's, which outlive a fit: each one's own peak, read
+    from /proc where there is one; those ended, the largest of them): the
+    sum of the peaks, at least the most ever held at once."""
+    total = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss + resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            if int(stat.read_text().rsplit(")", 1)[1].split()[1]) != os.getpid():  # not a child of this process
+                continue
+            status = (stat.parent / "status").read_text()
+        except (OSError, ValueError, IndexError):  # ended meanwhile
+            continue
+        total += next((int(line.split()[1]) for line in status.splitlines() if line.startswith("VmHWM:")), 0)
+    return total / 1024
 
 
 @contextmanager

@@ -28,6 +28,7 @@ from ..utils.threads import one_blas_thread
 
 __all__ = ["LRUNetwork", "batch_loss", "fit_network", "fit_networks", "one_cycle"]
 
+
 @njit(parallel=True, cache=True, fastmath=True)
 def _recurse(b, lam, n_seq, periodic, adjoint):
     """The recursions ``x[t, n] = lam[n] x[t - 1, n] + b[t, n]``, in place
@@ -169,8 +170,8 @@ class LRUNetwork:
     :meth:`backward` returns the gradients in the same layout. A batch of
     sequences of one length, all periodic or all from rest, goes through
     at once (``x`` of shape (n_sequences, n_samples, n_inputs)): the
-    products with the weights as one product each, the recursions of every
-    mode and sequence shared out over the cores. ``single``: the signals
+    products with the weights as one product each, the sequences'
+    recursions shared out over the cores. ``single``: the signals
     and products in float32 (the parameters, their gradients and Adam's
     moments stay float64); False computes in float64 throughout (what a
     finite-difference check needs)."""
