@@ -267,11 +267,11 @@ if train is not None:
 #   in the mean, the payload's level 6 far above the deep LRU's figure
 #   (``benchmarks/f16_clearances.py``). A deep network of linear recurrent
 #   units above the band (``LRUAboveBandRegressor``, the force there gated
-#   by the state, its loss the mean NRMSE) on the mean of two single-start
-#   fits of the 18-state model reaches 0.127 on one draw in under ten
-#   minutes, level 6 at the deep LRU's figures, but 0.137 on another: the
-#   draws of the model of the band still spread by more than the margin
-#   (``benchmarks/f16_lru.py``).
+#   by the state, its loss the mean NRMSE, two networks averaged) on the
+#   mean of two single-start fits of the 18-state model reaches 0.125 on
+#   the first draw in under seven minutes, level 6 below the deep LRU's
+#   figures, but 0.134 and 0.128 on two more: the draws of the model of the
+#   band still spread by more than the margin (``benchmarks/f16_lru.py``).
 # - **Amplitudes between the fitted ones.** Every level drives the same
 #   multisine at another amplitude, so the test levels ask how the response
 #   changes between fitted amplitudes, and in the band the models miss the

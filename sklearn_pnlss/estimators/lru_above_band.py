@@ -111,9 +111,8 @@ class LRUAboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         ``cutoff``, where the worst-simulated outputs take the network.
     n_networks : int, default=1
         So many networks, from different initial weights and segments, are
-        fitted and their outputs averaged: their errors partly cancel (on
-        the F-16, two take the mean test NRMSE from 0.127 to 0.124), for as
-        many times the weights and the work.
+        fitted and their outputs averaged: their errors partly cancel, for
+        as many times the weights and the work.
     n_jobs : int or None, default=None
         With ``n_networks`` above 1: how many networks are fitted at a time,
         each in its own process with its share of the cores (joblib's
@@ -166,15 +165,17 @@ class LRUAboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
     -----
     On the F-16 ground vibration test (``benchmarks/f16_lru.py``), fitted
     on the estimation levels' multisines and sine sweeps on top of the
-    benchmark's decoupled model of 18 states, it takes the mean test NRMSE
-    of one fit from 0.173 to 0.134, and of the mean of two single-start
-    fits (an :class:`AveragedRegressor`) from 0.168 to 0.127, the network
-    fitted in about 320 s on 2 cores (the README's F-16 section has the
-    figures). An iteration passes each
-    periodic signal's period and one segment of each other signal forward
-    and back: about ``24 n_layers n_modes width`` flops a sample (the
-    products with ``B`` and ``C``, forward and back), so the fit grows with
+    benchmark's decoupled model of 18 states, two networks
+    (``n_networks=2, n_jobs=2``) take the mean test NRMSE of one fit from
+    0.173 to 0.130, and of the mean of two single-start fits (an
+    :class:`AveragedRegressor`) from 0.168 to 0.125, fitted in about 190 s
+    on 2 cores (the README's F-16 section has the figures). An iteration
+    passes each periodic signal's period and one segment of each other
+    signal forward and back: about ``24 n_layers n_modes width`` flops a
+    sample in products with the weights, so the fit grows with
     ``max_iter`` and the number of signals, not with the records' lengths.
+    On the F-16's 98304 samples an iteration takes 0.52 s on 2 cores, its
+    products alone 0.28 s on one (``benchmarks/bench_lru_iteration.py``).
 
     Examples
     --------
