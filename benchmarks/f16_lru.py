@@ -7,10 +7,10 @@ estimation levels' multisines and sine sweeps (issue 35).
 The model of the band is ``bench_f16.py``'s best decoupled model
 (``DecoupledPNLSSRegressor(18, n_branches=3, degree=5,
 branch_basis="signed_powers", init="random")`` from the BLA of 18 states,
-fitted on the multisines of levels 1, 3, 5 and 7), in two forms of one
-cost: for each of ``--draws`` the mean of two fits from one random start
-each (``AveragedRegressor``, the two fitted side by side on the two cores;
-draw ``k``'s members are seeded ``2k`` and ``2k + 1``), and for each of
+fitted on the multisines of levels 1, 3, 5 and 7), in two forms: for
+each of ``--draws`` the mean of four fits from one random start each
+(``AveragedRegressor``, two at a time side by side on the two cores; draw
+``k``'s members are seeded ``4k`` to ``4k + 3``), and for each of
 ``--single`` one fit keeping the better of two starts (the model of
 ``bench_f16.py``). It is kept as it is (``FrozenEstimator``) and given
 its response above 15.5 Hz by ``LRUAboveBandRegressor`` at its defaults
@@ -21,9 +21,10 @@ NRMSE of the whole simulation; ``random_state`` the draw's) but for
 side by side on the two cores in the time of one. Each reads the force,
 the gated force above the band and the model's simulation, and is fitted
 on the multisines (each its periods' mean, in steady state) and the
-estimation levels' sine sweeps (segments from rest). Nothing was chosen
-on the test levels but the number of networks (two: what the two cores
-fit in the time of one).
+estimation levels' sine sweeps (segments from rest). The numbers of
+members and networks are what the two cores fit side by side (two draws
+of two members with one network each spread from 0.127 to 0.137);
+nothing else was chosen on the test levels.
 
 Each row holds the test multisines' NRMSE (periodic steady state), the test
 levels' sine sweeps (from rest), the fit time (the BLA's, the model's and
@@ -73,22 +74,24 @@ def draw_rows(name, settings, model, start, start_s, X, y, train_sweeps, test, s
 
 # networks averaged above the band, fitted side by side (one on each core)
 N_NETWORKS = 2
+# single-start fits averaged in a draw's model of the band: two on each core
+N_MEMBERS = 4
 # the decoupled model of the band, as its rows name it and record its settings
 DECOUPLED = f"DecoupledPNLSSRegressor({STATES}, {BRANCHES}, {DEGREE}, {BASIS}) random"
 DECOUPLED_SETTINGS = {"n_states": STATES, "n_branches": BRANCHES, "degree": DEGREE, "branch_basis": BASIS}
 
 
 def averaged(seed):
-    """Draw ``seed``'s model of the band: the mean of two fits from one
-    random start each, seeded ``2 seed`` and ``2 seed + 1``, fitted side by
-    side."""
+    """Draw ``seed``'s model of the band: the mean of N_MEMBERS fits from
+    one random start each, seeded ``N_MEMBERS seed`` on, two at a time side
+    by side."""
     from sklearn_pnlss import AveragedRegressor
 
     member = bench_f16.decoupled_estimator(STATES, BRANCHES, DEGREE, branch_basis=BASIS, n_init=1)
-    name = f"AveragedRegressor(2 x {DECOUPLED}, n_init=1)"
-    settings = {**DECOUPLED_SETTINGS, "n_init": 1, "n_estimators": 2, "random_state": 2 * seed}
-    return name, settings, AveragedRegressor(member.set_params(n_jobs=1), n_estimators=2, n_jobs=2,
-                                             random_state=2 * seed)
+    name = f"AveragedRegressor({N_MEMBERS} x {DECOUPLED}, n_init=1)"
+    settings = {**DECOUPLED_SETTINGS, "n_init": 1, "n_estimators": N_MEMBERS, "random_state": N_MEMBERS * seed}
+    return name, settings, AveragedRegressor(member.set_params(n_jobs=1), n_estimators=N_MEMBERS, n_jobs=2,
+                                             random_state=N_MEMBERS * seed)
 
 
 def single(seed):
