@@ -269,7 +269,7 @@ if train is not None:
 #   units above the band (``LRUAboveBandRegressor``, the force there gated
 #   by the state, its loss the mean NRMSE, two networks averaged) on the
 #   mean of two single-start fits of the 18-state model reaches 0.125 on
-#   the first draw in under seven minutes, level 6 below the deep LRU's
+#   the first draw in under six minutes, level 6 below the deep LRU's
 #   figures, but 0.134 and 0.128 on two more: the draws of the model of the
 #   band still spread by more than the margin (``benchmarks/f16_lru.py``).
 # - **Amplitudes between the fitted ones.** Every level drives the same

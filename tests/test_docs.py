@@ -1603,8 +1603,8 @@ FIGURES = [
     Figure(R, "gives the output above 15.5 Hz through three residual layers of 64 linear recurrent units (stable "
               "complex first-order recursions) between 32 channels", LRU,
            lambda: [_lru(0)["model"]["cutoff_hz"], _lru(0)["model"]["n_modes"], _lru(0)["model"]["width"]]),
-    Figure(R, "fitted side by side on the two cores (`AveragedRegressor`: 206 s with the linear start, against "
-              "173 s for one fit keeping the better of two starts)", LRU,
+    Figure(R, "fitted side by side on the two cores (`AveragedRegressor`: 135 s with the linear start, against "
+              "110 s for one fit keeping the better of two starts)", LRU,
            lambda: [_lru(0, False)["fit_s"], _lru(0, False, "single")["fit_s"]]),
     Figure(R, "An iteration of one network takes 0.521 s on the two cores and of two side by side 0.606 s, where the "
               "products with the weights alone (16.3 GFlop) take 0.283 s on one core at the machine's "
@@ -1614,21 +1614,21 @@ FIGURES = [
                     _results("lru_iteration")["product_gflop"], _results("lru_iteration")["products_alone_s"],
                     _results("lru_iteration")["network"]["width"]]),
     Figure(R, "On the first draw the test multisines go to 0.125 (level 6: 0.109 / 0.097 / 0.215, every output "
-              "below the deep LRU's 0.134 / 0.099 / 0.237) and the sweeps to 0.203, fitted in 395 s (the networks "
-              "189 s, 300 iterations)", LRU,
+              "below the deep LRU's 0.134 / 0.099 / 0.237) and the sweeps to 0.203, fitted in 318 s (the networks "
+              "184 s, 300 iterations)", LRU,
            lambda: [_lru(0)["mean_nrmse"], 6, *_lru(0)["nrmse"]["6"], *_f16_lru_level_6(),
                     _lru(0)["mean_nrmse_sweeps"], _lru(0)["fit_s"], _lru(0)["network_fit_s"],
                     _lru(0)["model"]["max_iter"]]),
     Figure(R, "The second draw reaches 0.134 (level 6: 0.111 / 0.103 / 0.216), its model of the band worse on level "
-              "4 (0.178 alone, against 0.168); the third 0.128 (level 6: 0.108 / 0.101 / 0.211), but its model of "
+              "4 (0.178 alone, against 0.168); the third 0.128 (level 6: 0.108 / 0.101 / 0.210), but its model of "
               "the band is unstable at rest and its level-6 sweep from rest grows away (sweeps 0.748). One fit with "
-              "the better of two starts and the same networks gives 0.130 in 360 s", LRU,
+              "the better of two starts and the same networks gives 0.130 in 290 s", LRU,
            lambda: [_lru(1)["mean_nrmse"], 6, *_lru(1)["nrmse"]["6"], 4, _lru(1, False)["mean_nrmse"],
                     _lru(0, False)["mean_nrmse"], _lru(2)["mean_nrmse"], 6, *_lru(2)["nrmse"]["6"], 6,
                     _lru(2)["mean_nrmse_sweeps"], _lru(0, kind="single")["mean_nrmse"],
                     _lru(0, kind="single")["fit_s"]]),
     Figure(R, "The mean of the first two draws reaches 0.124 (level 6: 0.106 / 0.096 / 0.207; sweeps 0.186), but "
-              "in 789 s. The target holds on one draw of three within ten minutes", LRU,
+              "in 628 s. The target holds on one draw of three within ten minutes", LRU,
            lambda: [_results("f16_lru")["averages"][0]["mean_nrmse"], 6, *_results("f16_lru")["averages"][0]["nrmse"]["6"],
                     _results("f16_lru")["averages"][0]["mean_nrmse_sweeps"],
                     _results("f16_lru")["averages"][0]["fit_s"]]),
@@ -1637,7 +1637,7 @@ FIGURES = [
     Figure(R, "| the mean of two single-start fits of that decoupled model (`AveragedRegressor`, fitted side by side) "
               "with two deep networks of linear recurrent units above the band, averaged "
               "(`LRUAboveBandRegressor(n_networks=2)`, `benchmarks/f16_lru.py`; 58081 more weights and gate "
-              "coefficients) | 252 | 0.125 | 395 s |", LRU,
+              "coefficients) | 252 | 0.125 | 318 s |", LRU,
            lambda: [2, _lru(0)["n_above_band_params"],
                     _lru(0)["model"]["n_estimators"] * _lru(0, False, "single")["n_nonlinear_params"],
                     _lru(0)["mean_nrmse"], _lru(0)["fit_s"]]),

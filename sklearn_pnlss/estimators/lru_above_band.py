@@ -168,7 +168,7 @@ class LRUAboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
     benchmark's decoupled model of 18 states, two networks
     (``n_networks=2, n_jobs=2``) take the mean test NRMSE of one fit from
     0.173 to 0.130, and of the mean of two single-start fits (an
-    :class:`AveragedRegressor`) from 0.168 to 0.125, fitted in about 190 s
+    :class:`AveragedRegressor`) from 0.168 to 0.125, fitted in about 185 s
     on 2 cores (the README's F-16 section has the figures). An iteration
     passes each periodic signal's period and one segment of each other
     signal forward and back: about ``24 n_layers n_modes width`` flops a
