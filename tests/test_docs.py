@@ -1629,7 +1629,8 @@ FIGURES = [
                     _lru(0, kind="single")["fit_s"]]),
     Figure(R, "The mean of the first two draws reaches 0.124 (level 6: 0.106 / 0.096 / 0.207; sweeps 0.186), but "
               "in 628 s. The target holds on one draw of three within ten minutes", LRU,
-           lambda: [_results("f16_lru")["averages"][0]["mean_nrmse"], 6, *_results("f16_lru")["averages"][0]["nrmse"]["6"],
+           lambda: [_results("f16_lru")["averages"][0]["mean_nrmse"], 6,
+                    *_results("f16_lru")["averages"][0]["nrmse"]["6"],
                     _results("f16_lru")["averages"][0]["mean_nrmse_sweeps"],
                     _results("f16_lru")["averages"][0]["fit_s"]]),
     Figure(R, "keeps its figures (0.089 / 0.109 / 0.113 on the first draw, the model alone 0.089 / 0.110 / 0.113)",
