@@ -322,8 +322,8 @@ class LRUAboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
     def _network_output(self, view, period):
         """The networks' mean output in its units of the regressor's error
         (one period in steady state, or from rest)."""
-        periodic = period is not None
-        out = np.mean([network.forward(view / self.input_scale_, periodic) for network in self.networks_], axis=0)
+        periodic, scaled = period is not None, view / self.input_scale_
+        out = np.mean([network.forward(scaled, periodic) for network in self.networks_], axis=0)
         return _above_cutoff(self.cutoff, self.fs, out, periodic) * self.output_scale_
 
     def predict(self, X):
