@@ -22,6 +22,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from ..utils.handover import training_signals
 from ..utils.parameters import Interval, validates_parameters
+from ..utils.threads import side_by_side_blas
 from ..utils.validation import as_signal_list, restore_layout, signal_layout, validate_signals
 from ._base import DynamicRegressorMixin
 from .decoupled import DecoupledPNLSSRegressor
@@ -176,8 +177,9 @@ class AveragedRegressor(DynamicRegressorMixin, BaseEstimator):
             )
         _, y_list, _ = validate_signals(self, *training_signals(X, y), reset=True)
         self.seeds_ = self._seeds()
-        self.estimators_ = Parallel(n_jobs=self.n_jobs, prefer="threads")(
-            delayed(_fit_member)(regressor, int(seed), X, y, fit_params) for seed in self.seeds_)
+        with side_by_side_blas(self.n_jobs, len(self.seeds_)):
+            self.estimators_ = Parallel(n_jobs=self.n_jobs, prefer="threads")(
+                delayed(_fit_member)(regressor, int(seed), X, y, fit_params) for seed in self.seeds_)
         self.n_outputs_ = y_list[0].shape[1]
         self.n_params_ = int(sum(_n_params(member) for member in self.estimators_))
         self._y_was_1d = signal_layout(y).kind == "1d"

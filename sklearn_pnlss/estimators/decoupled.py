@@ -18,6 +18,7 @@ from ..statespace.fitting import optimise
 from ..statespace.model_base import DivergenceError
 from ..utils.handover import attach_stage
 from ..utils.parameters import Interval, Options
+from ..utils.threads import side_by_side_blas
 from ..utils.validation import restore_layout, validate_signals
 from ._statespace import FIT_PARAMETER_CONSTRAINTS, StateSpaceRegressorBase
 from .bla import BLAEstimator
@@ -328,9 +329,10 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         best is kept."""
         trajectory = self._trajectory(full, X_list, "start model")
         seeds = check_random_state(self.random_state).randint(np.iinfo(np.int32).max, size=self.n_init)
-        runs = Parallel(n_jobs=self.n_jobs, prefer="threads")(
-            delayed(self._one_start)(full, trajectory, int(seed), objectives, settings, val) for seed in seeds
-        )
+        with side_by_side_blas(self.n_jobs, len(seeds)):
+            runs = Parallel(n_jobs=self.n_jobs, prefer="threads")(
+                delayed(self._one_start)(full, trajectory, int(seed), objectives, settings, val) for seed in seeds
+            )
         fits, cpd_errors = zip(*runs)
         scores = np.array([
             f.validation_error if val is not None else 10 * np.log10(f.kept_cost) for f in fits
