@@ -1406,7 +1406,7 @@ FIGURES = [
            F16, lambda: [_f16_step(), _f16_iteration("eigendecomposition instead (not used)")]),
     Figure(PN, "its steps cost 0.35 s per iteration, where the eigendecomposition alone would take 2.03 s", F16,
            lambda: [_f16_step(), _f16_iteration("eigendecomposition instead (not used)")]),
-    Figure(PN, "Above 1024 parameters the Jacobian is held in single precision", "the objective's rule",
+    Figure(PN, "Above 512 parameters the Jacobian is held in single precision", "the objective's rule",
            lambda: [objective.SINGLE_PRECISION_PARAMS]),
     Figure(PN, "iteration takes 4.94 s, of which the Gram matrix, the gradient and a simulation take 3.45 s (the "
                "single-precision rate needs 2.61 s for the Gram matrix) and the sensitivity recursion 0.95 s", F16,
