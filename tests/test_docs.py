@@ -457,6 +457,11 @@ def _lru(seed, network=True, kind="draws"):
     return next(r for r in rows if r["model"]["estimator"].startswith("LRUAboveBandRegressor") == network)
 
 
+def _lru_pair(k):
+    """f16_lru.py: the mean of the ``k``-th pair of draws (0: draws 0 and 1)."""
+    return _results("f16_lru")["averages"][k]
+
+
 def _one_figure(values, decimals):
     """``values`` if they all round to one figure at ``decimals`` places
     (a claim about several rows), else NaN (no quote matches it)."""
@@ -718,6 +723,7 @@ AVERAGED = "f16_averaged.py: f16_averaged.json"
 CLEARANCES = "f16_clearances.py: f16_clearances.json"
 LRU = "f16_lru.py: f16_lru.json"
 LRU_ITER = "bench_lru_iteration.py: lru_iteration.json"
+SIDE_BY_SIDE = "bench_side_by_side.py: side_by_side.json"
 GATED_FILTERS, GATED_SWEEPS, HINGES = ("gated filters", "gated filters, with the sweeps",
                                        "gated filters and hinges, with the sweeps")
 NOISE_TEST = "tests/test_pnlss_fitting.py::test_noise_weighting_weighs_each_level_by_its_own_noise"
@@ -1603,9 +1609,11 @@ FIGURES = [
     Figure(R, "gives the output above 15.5 Hz through three residual layers of 64 linear recurrent units (stable "
               "complex first-order recursions) between 32 channels", LRU,
            lambda: [_lru(0)["model"]["cutoff_hz"], _lru(0)["model"]["n_modes"], _lru(0)["model"]["width"]]),
-    Figure(R, "fitted side by side on the two cores (`AveragedRegressor`: 135 s with the linear start, against "
-              "110 s for one fit keeping the better of two starts)", LRU,
-           lambda: [_lru(0, False)["fit_s"], _lru(0, False, "single")["fit_s"]]),
+    Figure(R, "fitted side by side on the two cores (`AveragedRegressor`: 53 s with the linear start, each fit on "
+              "one core with BLAS on one thread, in single precision above 512 parameters", LRU,
+           lambda: [_lru(0, False)["fit_s"], objective.SINGLE_PRECISION_PARAMS]),
+    Figure(R, "with BLAS threaded in each and in double precision the two fits took 122 s", SIDE_BY_SIDE,
+           lambda: [_results("side_by_side")["ways"]["blas_in_each"]["fit_s"]]),
     Figure(R, "An iteration of one network takes 0.521 s on the two cores and of two side by side 0.606 s, where the "
               "products with the weights alone (16.3 GFlop) take 0.283 s on one core at the machine's "
               "single-precision BLAS rate (`benchmarks/bench_lru_iteration.py`): a layer of 32 channels", LRU_ITER,
@@ -1613,35 +1621,37 @@ FIGURES = [
                     _results("lru_iteration")["iteration_of_two_side_by_side_s"],
                     _results("lru_iteration")["product_gflop"], _results("lru_iteration")["products_alone_s"],
                     _results("lru_iteration")["network"]["width"]]),
-    Figure(R, "On the first draw the test multisines go to 0.125 (level 6: 0.109 / 0.097 / 0.215, every output "
-              "below the deep LRU's 0.134 / 0.099 / 0.237) and the sweeps to 0.203, fitted in 318 s (the networks "
-              "184 s, 300 iterations)", LRU,
-           lambda: [_lru(0)["mean_nrmse"], 6, *_lru(0)["nrmse"]["6"], *_f16_lru_level_6(),
-                    _lru(0)["mean_nrmse_sweeps"], _lru(0)["fit_s"], _lru(0)["network_fit_s"],
-                    _lru(0)["model"]["max_iter"]]),
-    Figure(R, "The second draw reaches 0.134 (level 6: 0.111 / 0.103 / 0.216), its model of the band worse on level "
-              "4 (0.178 alone, against 0.168); the third 0.128 (level 6: 0.108 / 0.101 / 0.210), but its model of "
-              "the band is unstable at rest and its level-6 sweep from rest grows away (sweeps 0.748). One fit with "
-              "the better of two starts and the same networks gives 0.130 in 290 s", LRU,
-           lambda: [_lru(1)["mean_nrmse"], 6, *_lru(1)["nrmse"]["6"], 4, _lru(1, False)["mean_nrmse"],
-                    _lru(0, False)["mean_nrmse"], _lru(2)["mean_nrmse"], 6, *_lru(2)["nrmse"]["6"], 6,
-                    _lru(2)["mean_nrmse_sweeps"], _lru(0, kind="single")["mean_nrmse"],
-                    _lru(0, kind="single")["fit_s"]]),
-    Figure(R, "The mean of the first two draws reaches 0.124 (level 6: 0.106 / 0.096 / 0.207; sweeps 0.186), but "
-              "in 628 s. The target holds on one draw of three within ten minutes", LRU,
-           lambda: [_results("f16_lru")["averages"][0]["mean_nrmse"], 6,
-                    *_results("f16_lru")["averages"][0]["nrmse"]["6"],
-                    _results("f16_lru")["averages"][0]["mean_nrmse_sweeps"],
-                    _results("f16_lru")["averages"][0]["fit_s"]]),
-    Figure(R, "keeps its figures (0.089 / 0.109 / 0.113 on the first draw, the model alone 0.089 / 0.110 / 0.113)",
+    Figure(R, "One such draw takes 231 to 240 s (the networks 178 to 187 s, 300 iterations). The first draw reaches "
+              "0.125 on the test multisines (level 6: 0.108 / 0.097 / 0.215), the second 0.133 (level 6: 0.112 / 0.104 "
+              "/ 0.217), the third 0.129 (level 6: 0.109 / 0.099 / 0.212)", LRU,
+           lambda: [min(_lru(k)["fit_s"] for k in range(4)), max(_lru(k)["fit_s"] for k in range(4)),
+                    min(_lru(k)["network_fit_s"] for k in range(4)), max(_lru(k)["network_fit_s"] for k in range(4)),
+                    _lru(0)["model"]["max_iter"], _lru(0)["mean_nrmse"], 6, *_lru(0)["nrmse"]["6"],
+                    _lru(1)["mean_nrmse"], 6, *_lru(1)["nrmse"]["6"],
+                    _lru(2)["mean_nrmse"], 6, *_lru(2)["nrmse"]["6"]]),
+    Figure(R, "the first two reach 0.124 (level 6: 0.106 / 0.097 / 0.208, every output below the deep LRU's 0.134 / "
+              "0.099 / 0.237), fitted in 464 s", LRU,
+           lambda: [_lru_pair(0)["mean_nrmse"], 6, *_lru_pair(0)["nrmse"]["6"], *_f16_lru_level_6(),
+                    _lru_pair(0)["fit_s"]]),
+    Figure(R, "The next two reach the targets on levels 4 and 6 (level 6: 0.106 / 0.099 / 0.205) but not on level 2, "
+              "where one member of the fourth draw oscillates by itself: its state equation is unstable at rest "
+              "(spectral radius 1.00035 per sample), its simulation of the level-2 multisine never settles into a "
+              "periodic response, and that pair scores 0.171", LRU,
+           lambda: [4, 6, 6, *_lru_pair(1)["nrmse"]["6"], 2, _lru(3)["radius_at_rest"], 2,
+                    _lru_pair(1)["mean_nrmse"]]),
+    Figure(R, "(the draws' largest radii 1.00006 to 1.00035), and it shows on the sweeps too: the first draw's "
+              "level-6 sweep from rest grows away (sweeps 1.82, the pair's 0.961)", LRU,
+           lambda: [min(_lru(k)["radius_at_rest"] for k in range(4)), max(_lru(k)["radius_at_rest"] for k in range(4)),
+                    6, _lru(0)["mean_nrmse_sweeps"], _lru_pair(0)["mean_nrmse_sweeps"]]),
+    Figure(R, "keeps its figures (0.088 / 0.109 / 0.113 on the first draw, the model alone 0.088 / 0.110 / 0.113)",
            LRU, lambda: [*_lru(0)["nrmse"]["2"], *_lru(0, False)["nrmse"]["2"]]),
-    Figure(R, "| the mean of two single-start fits of that decoupled model (`AveragedRegressor`, fitted side by side) "
-              "with two deep networks of linear recurrent units above the band, averaged "
-              "(`LRUAboveBandRegressor(n_networks=2)`, `benchmarks/f16_lru.py`; 58081 more weights and gate "
-              "coefficients) | 252 | 0.125 | 318 s |", LRU,
-           lambda: [2, _lru(0)["n_above_band_params"],
-                    _lru(0)["model"]["n_estimators"] * _lru(0, False, "single")["n_nonlinear_params"],
-                    _lru(0)["mean_nrmse"], _lru(0)["fit_s"]]),
+    Figure(R, "| the mean of two draws, each the mean of two single-start fits of that decoupled model "
+              "(`AveragedRegressor`, fitted side by side) with two deep networks of linear recurrent units above the "
+              "band, averaged (`LRUAboveBandRegressor(n_networks=2)`, `benchmarks/f16_lru.py`; 116162 more weights "
+              "and gate coefficients) | 504 | 0.124 | 464 s |", LRU,
+           lambda: [2, len(_lru_pair(0)["model"]["draws"]) * _lru(0)["n_above_band_params"],
+                    len(_lru_pair(0)["model"]["draws"]) * _lru(0)["model"]["n_estimators"] * _n_decoupled(3, 5, n=18),
+                    _lru_pair(0)["mean_nrmse"], _lru_pair(0)["fit_s"]]),
     Figure(R, "six layers of 100 states", "Forgione et al., CDC 2024, the case study", lambda: [None]),
     Figure(R, "It has 51 nonlinear parameters where the full model in the states and input has 90 "
               "(the states-only model above: 48)", "the models' structure",
@@ -2264,10 +2274,11 @@ def test_the_f16_best_is_the_readme_row_and_was_fitted_within_ten_minutes():
 
 
 def test_the_f16_lru_best_is_the_readme_row_and_the_lowest_within_ten_minutes():
-    """The README says the first draw with the network above the band is
-    the best F-16 model of the benchmarks fitted in under ten minutes."""
+    """The README says the mean of the first two draws with the networks
+    above the band is the best F-16 model of the benchmarks fitted in
+    under ten minutes."""
     best = _results("f16_lru")["best"]
-    assert best == _lru(0)
+    assert best == _lru_pair(0)
     assert best["fit_s"] < 600.0
     assert best["mean_nrmse"] < _results("f16_clearances")["best"]["mean_nrmse"]
     assert {"model", "mean_nrmse", "nrmse", "fit_s", "peak_memory_mb"} <= best.keys()

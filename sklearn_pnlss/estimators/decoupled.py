@@ -170,7 +170,7 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         As in :class:`PNLSSRegressor`, for the decoupled model's fit.
     n_jobs : int or None, default=None
         Parallel starts (joblib threads: the compiled kernels release the
-        GIL). None means 1.
+        GIL; BLAS on one thread while several run at once). None means 1.
     verbose : int, default=0
         Print the iterations of each start.
     random_state : int, RandomState instance or None, default=None

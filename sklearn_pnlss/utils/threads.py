@@ -109,8 +109,8 @@ def side_by_side_blas(n_jobs, n_tasks):
     Each fit then keeps one core, as in a process of its own. With BLAS
     threaded in each, their Gram matrices contended for the same cores:
     two F-16 decoupled fits side by side (18 states, 525 parameters) took
-    126 s, 68 s on one BLAS thread each, with the same models to four
-    digits.
+    122 s, 67 s on one BLAS thread each, with the same models to four
+    digits (``benchmarks/bench_side_by_side.py``).
     """
     from joblib import effective_n_jobs
 
