@@ -67,3 +67,26 @@ def test_columns_are_shared_out_in_consecutive_spans(monkeypatch, blas, n_column
     over_column_spans(span, n_columns, min_span)
     assert sorted(d[:2] for d in done) == spans
     assert [d[:2] for d in done if d[2]] == [spans[0]]  # the first in the caller's thread
+
+
+@pytest.mark.parametrize("n_jobs, n_tasks, limited", [(2, 2, True), (3, 5, True), (None, 2, False),
+                                                      (1, 4, False), (2, 1, False)])
+def test_fits_side_by_side_limit_blas_only_when_several_run_at_once(monkeypatch, n_jobs, n_tasks, limited):
+    """Fits in joblib threads (an AveragedRegressor's members, a decoupled
+    model's starts) hold BLAS on one thread only when more than one runs
+    at a time: one fit alone keeps BLAS's threads."""
+    entered = []
+
+    class Limiter:
+        def restore_original_limits(self):
+            pass
+
+    class Controller:
+        def limit(self, limits, user_api):
+            entered.append((limits, user_api))
+            return Limiter()
+
+    monkeypatch.setattr(threads, "_controller", lambda: Controller())
+    with threads.side_by_side_blas(n_jobs, n_tasks):
+        pass
+    assert entered == ([(1, "blas")] if limited else [])

@@ -38,12 +38,11 @@ JACOBIAN_BLOCK_BYTES = 128 * 2**20
 # on 2 cores; a decoupled F-16 model of 525 parameters, two fitted side by
 # side on one core each: 67 s in double precision, 45 s in single, test
 # NRMSE 0.1684 and 0.1689, benchmarks/bench_side_by_side.py) in half the
-# memory. The gradient J^T e is
-# summed in double precision from the same rows, and every step is still
-# accepted or rejected on the cost in double precision: only the metric of
-# the step is rounded (to 1e-7 of the largest column, which the damping
-# dominates), so the fit cannot end worse, and it stops where the gradient
-# vanishes as before. Smaller models keep double precision throughout:
+# memory. The gradient J^T e is summed in double precision from the same
+# rows, and every step is still accepted or rejected on the cost in double
+# precision: only the metric of the step is rounded (to 1e-7 of the largest
+# column, which the damping dominates), so the fit cannot end worse, and it
+# stops where the gradient vanishes as before. Smaller models keep double precision throughout:
 # their iterations wait on the recursion and the simulations, not on J^T J.
 SINGLE_PRECISION_PARAMS = 512
 

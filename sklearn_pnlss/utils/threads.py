@@ -7,6 +7,7 @@ from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager, nullcontext
 from functools import lru_cache
 
+from joblib import effective_n_jobs
 from threadpoolctl import ThreadpoolController
 
 __all__ = ["one_blas_thread", "blas_threads_for", "symmetric_threads_for", "side_by_side_blas", "each_in_threads",
@@ -112,8 +113,6 @@ def side_by_side_blas(n_jobs, n_tasks):
     122 s, 67 s on one BLAS thread each, with the same models to four
     digits (``benchmarks/bench_side_by_side.py``).
     """
-    from joblib import effective_n_jobs
-
     return one_blas_thread() if min(effective_n_jobs(n_jobs), n_tasks) > 1 else nullcontext()
 
 
