@@ -7,7 +7,10 @@ import numpy as np
 import pytest
 
 from sklearn_pnlss import PNLSSRegressor
+from sklearn_pnlss.statespace.fitting import _sane_on_new_inputs
+from sklearn_pnlss.statespace.monomials import monomial_exponents
 from sklearn_pnlss.statespace.new_inputs import random_phase_inputs
+from sklearn_pnlss.statespace.pnlss import PNLSSModel
 from test_pnlss_fitting import N, _data, _truth, two_levels
 
 
@@ -76,3 +79,54 @@ def test_small_data_bouc_wen_model_does_not_lose_to_its_linear_start():
     db = np.array([float(rms_error(b[None], model.predict(a[None]), db=True))
                    for a, b in zip(new.X_train, new.y_train)])
     assert np.max(db) < -85, db
+
+
+def _oscillator(radius):
+    """A two-state PNLSS model: a rotation by 0.3 rad a sample scaled by
+    ``radius``, bounded by a hardening cubic on each state; above 1 at
+    rest it oscillates by itself, on a limit cycle the cubic sets."""
+    exE = monomial_exponents(3, (3,))
+    E = np.zeros((2, len(exE)))
+    for i in range(2):
+        E[i, np.flatnonzero(exE[:, i] == 3)] = -0.5
+    c, s = np.cos(0.3), np.sin(0.3)
+    return PNLSSModel(A=radius * np.array([[c, -s], [s, c]]), B=np.array([[0.2], [0.0]]), C=np.array([[1.0, 0.0]]),
+                      D=np.zeros((1, 1)), E=E, F=np.zeros((1, 0)), exE=exE,
+                      exF=np.zeros((0, 3), dtype=np.int64))
+
+
+def test_a_model_that_oscillates_by_itself_does_not_settle():
+    """The response to a periodic input repeated from rest settles into a
+    periodic steady state for a model stable at rest, and not for one
+    that oscillates by itself (its own frequency is not the input's)."""
+    U = 0.1 * np.sin(2 * np.pi * 3 * np.arange(N) / N)[:, None]
+    assert _oscillator(0.95).settles(U)
+    assert not _oscillator(1.02).settles(U)
+    assert not _oscillator(1.02).settles(U, max_periods=3)
+
+
+def test_the_kept_iterate_is_the_latest_that_settles_on_the_training_inputs():
+    """Iterates 10 and 9 oscillate by themselves on one of two training
+    inputs (and run away on none of the new ones): iterate 8 is kept and
+    the report says why."""
+    class StandIn:
+        def __init__(self, settled):
+            self.settled = settled
+
+        def runs_away(self, U, period, max_periods):
+            return False
+
+        def settles(self, U):
+            return self.settled or U[0, 0] > 0  # the second training input settles for every iterate
+
+    order = [(k, None, np.nan, 1.0) for k in range(10, -1, -1)]
+    models = {k: StandIn(k <= 8) for k in range(11)}
+    training = [np.zeros((4, 1)), np.ones((4, 1))]
+    kept, report = _sane_on_new_inputs(order, lambda it: models[it[0]], [np.zeros((4, 1))], 4, training)
+    assert kept[0] == 8
+    assert (report.n_runaway, report.n_unsettled, report.n_training, report.kept_iteration) == (0, 1, 2, 8)
+    message = report.message("the latest")
+    assert "does not settle into a periodic response on 1 of its 2 periodic training inputs" in message
+    assert "runs away" not in message and "iterate 8 is kept instead" in message
+    settled, none = _sane_on_new_inputs(order[2:], lambda it: models[it[0]], [], 4, training)
+    assert settled[0] == 8 and none is None

@@ -17,6 +17,7 @@ lie inside that range by construction, so the fit itself is unchanged.
 """
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
+from functools import partial
 
 import numpy as np
 
@@ -24,7 +25,7 @@ from ..frequency.noise import signal_noise_variances
 from ..metrics import to_db
 from ..utils.validation import is_periodic
 from .levenberg_marquardt import levenberg_marquardt
-from .model_base import DivergenceError
+from .model_base import MAX_STEADY_PERIODS, DivergenceError
 from .objective import SimulationError
 from .segments import make_segments, transient_length
 
@@ -76,7 +77,9 @@ class FitSettings:
     ``new_inputs``: inputs (user units, one period each) of the training
     kind and level the kept iterate must not run away on (see
     :func:`~sklearn_pnlss.statespace.new_inputs.random_phase_inputs` and
-    :func:`optimise`).
+    :func:`optimise`). ``training_periods``: one period of each periodic
+    training input (user units), whose response, the input repeated from
+    rest, the kept iterate must settle into a periodic steady state on.
     """
 
     period: int | None = None
@@ -92,6 +95,7 @@ class FitSettings:
     verbose: int = 0
     n_threads: int = 1
     new_inputs: tuple = field(default=(), compare=False, repr=False)
+    training_periods: tuple = field(default=(), compare=False, repr=False)
 
     def period_of(self, U):
         """``period`` when ``U`` is a periodic steady-state signal, else None."""
@@ -116,23 +120,33 @@ class LMFit:
 @dataclass(frozen=True)
 class NewInputRunaway:
     """The preferred iterate of a fit ran away on new inputs of the
-    training kind (see :func:`optimise`)."""
+    training kind, or did not settle on its own training inputs (see
+    :func:`optimise`)."""
 
     iteration: int  # the preferred iterate
     n_runaway: int  # new inputs it ran away on
     n_inputs: int
     kept_iteration: int | None  # None: no iterate passed; the preferred one was kept
+    n_unsettled: int = 0  # training inputs whose response it did not settle on
+    n_training: int = 0
 
     def message(self, ranking):
         """The warning an estimator gives; ``ranking``: how the iterates
         were ordered ("the latest", "the best on the validation signals")."""
         kept = (f"iterate {self.kept_iteration} is kept instead, {ranking} of those that do not"
                 if self.kept_iteration is not None else "so do the other iterates probed, so it is kept all the same")
+        faults = []
+        if self.n_runaway:
+            faults.append(f"runs away on {self.n_runaway} of {self.n_inputs} new random-phase realisations of the "
+                          "training inputs (it leaves the range its nonlinearity was fitted on by more than that "
+                          "range's width)")
+        if self.n_unsettled:
+            faults.append(f"does not settle into a periodic response on {self.n_unsettled} of its {self.n_training} "
+                          f"periodic training inputs repeated from rest (within {MAX_STEADY_PERIODS} periods: it "
+                          "oscillates by itself, which its fit, a period after a short transient, did not see)")
         return (
-            f"The fitted model (iterate {self.iteration}) runs away on {self.n_runaway} of {self.n_inputs} new "
-            "random-phase realisations of the training inputs (it leaves the range its nonlinearity was fitted "
-            f"on by more than that range's width); {kept}. The training data are few for this model: give more "
-            "realisations, validation signals (X_val, y_val), or a smaller model."
+            f"The fitted model (iterate {self.iteration}) {' and '.join(faults)}; {kept}. The training data are few "
+            "for this model: give more realisations, validation signals (X_val, y_val), or a smaller model."
         )
 
 
@@ -404,7 +418,8 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
         return bounded[iterate[0]]
 
     kept, runaway = _sane_on_new_inputs(order, bounded_model, [start.normalise_inputs(U) for U in settings.new_inputs],
-                                        settings.period)
+                                        settings.period,
+                                        [start.normalise_inputs(U) for U in settings.training_periods])
     return LMFit(
         model=start.with_normalised(bounded_model(kept)),
         n_iter=done, best_iteration=kept[0],
@@ -416,31 +431,45 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
     )
 
 
-def _sane_on_new_inputs(order, bounded_model, new_inputs, period):
+def _sane_on_new_inputs(order, bounded_model, new_inputs, period, training_periods=()):
     """``(kept, runaway)``: the kept iterate, the first of ``order``
     (``(iteration, theta, validation error, cost)``, most wanted first)
     whose ``bounded_model(iterate)`` does not run away on any of
-    ``new_inputs`` (normalised, one period each), and None when that is the
-    first, else
-    :class:`NewInputRunaway`. The first is kept when there are no new inputs
-    or no iterate passes.
+    ``new_inputs`` (normalised, one period each) and settles into a
+    periodic steady state on each of ``training_periods`` (normalised, one
+    period each, repeated from rest as a prediction seeks it), and None
+    when that is the first, else :class:`NewInputRunaway`. The first is
+    kept when there are no such inputs or no iterate passes.
+
+    The training cost scores each period after a transient of at most a
+    period, so a response that drifts away from the fitted orbit by a few
+    per cent a period costs it nothing; a prediction repeats the period
+    until the state repeats, and then shows the model oscillating by
+    itself (an F-16 decoupled model unstable at rest, whose last
+    iterations gained little cost and lost the periodic response at a
+    fitted level).
 
     The iterates are probed at 1, 2, 4, ... places down the order, then
     bisected between the last one that failed and the first that passed: a
     few probes rather than every iterate, as a probe that passes simulates
     every new input."""
-    if not new_inputs:
+    if not new_inputs and not training_periods:
         return order[0], None
-    preferred = bounded_model(order[0])
-    n_first = sum(preferred.runs_away(U, period, max_periods=NEW_INPUT_PERIODS) for U in new_inputs)
-    if n_first == 0:
+
+    def faults(model):
+        runaway = sum(model.runs_away(U, period, max_periods=NEW_INPUT_PERIODS) for U in new_inputs)
+        return runaway, sum(not model.settles(U) for U in training_periods)
+
+    n_first, n_unsettled = faults(bounded_model(order[0]))
+    if n_first == 0 and n_unsettled == 0:
         return order[0], None
+    report = partial(NewInputRunaway, order[0][0], n_first, len(new_inputs), n_unsettled=n_unsettled,
+                     n_training=len(training_periods))
     verdicts = {}
 
     def passes(k):
         if k not in verdicts:
-            cand = bounded_model(order[k])
-            verdicts[k] = not any(cand.runs_away(U, period, max_periods=NEW_INPUT_PERIODS) for U in new_inputs)
+            verdicts[k] = faults(bounded_model(order[k])) == (0, 0)
         return verdicts[k]
 
     failed, last = 0, len(order) - 1
@@ -449,8 +478,8 @@ def _sane_on_new_inputs(order, bounded_model, new_inputs, period):
             break
         failed = probe
     else:
-        return order[0], NewInputRunaway(order[0][0], n_first, len(new_inputs), None)
+        return order[0], report(None)
     while probe - failed > 1:
         middle = (failed + probe) // 2
         failed, probe = (failed, middle) if passes(middle) else (middle, probe)
-    return order[probe], NewInputRunaway(order[0][0], n_first, len(new_inputs), order[probe][0])
+    return order[probe], report(order[probe][0])

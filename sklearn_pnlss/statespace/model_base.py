@@ -260,6 +260,36 @@ class StateSpaceModel:
         takes that many)."""
         return self.range_excursion(U, period, max_periods) > factor
 
+    def settles(self, U_period, max_periods=MAX_STEADY_PERIODS, rtol=1e-10):
+        """Whether the response to ``U_period`` repeated from rest settles
+        into a periodic steady state within ``max_periods`` periods (the
+        state repeats to ``rtol``, as :meth:`simulate_signal` seeks it);
+        False when it diverges.
+
+        A response that contracts steadily is taken to settle as soon as
+        its rate, the last three periods' largest ratio of successive state
+        changes, brings the change below ``rtol`` within the periods left:
+        a slow but steady approach need not be simulated to the end (it
+        took most of the check's time on the F-16), while a model that
+        oscillates by itself keeps changing at a rate near 1."""
+        x = np.zeros(self.n_states)
+        changes = []
+        for k in range(max_periods):
+            try:
+                x_new = self._checked_run(U_period, x)[2]
+            except DivergenceError:
+                return False
+            tolerance = rtol * (1.0 + np.linalg.norm(x_new))
+            changes.append(np.linalg.norm(x_new - x))
+            x = x_new
+            if changes[-1] <= tolerance:
+                return True
+            if len(changes) >= 4:
+                rate = max(b / a for a, b in zip(changes[-4:-1], changes[-3:]) if a > 0)
+                if rate < 1.0 and changes[-1] * rate ** (max_periods - 1 - k) <= tolerance:
+                    return True
+        return False
+
     def segment_start(self, seg):
         """The state a segment's simulation starts from: rest, or the one
         its first ``init_window`` outputs show. The Jacobian takes it as

@@ -14,11 +14,20 @@ from sklearn.utils import check_random_state
 
 from ..utils.validation import is_periodic
 
-__all__ = ["N_NEW_INPUTS", "random_phase_inputs"]
+__all__ = ["N_NEW_INPUTS", "random_phase_inputs", "training_periods"]
 
 # Realisations checked: a model that runs away on one new realisation in
 # seven (the Bouc-Wen case above) passes all 40 with probability 0.2 %.
 N_NEW_INPUTS = 40
+
+
+def training_periods(X_list, period):
+    """One period of each periodic training input (the mean of its
+    periods); those not made of whole periods are left out, and all
+    without a period."""
+    if period is None:
+        return ()
+    return tuple(U.reshape(-1, period, U.shape[1]).mean(axis=0) for U in X_list if is_periodic(U.shape[0], period))
 
 
 def random_phase_inputs(X_list, period, n_inputs=N_NEW_INPUTS, random_state=None):
@@ -45,11 +54,10 @@ def random_phase_inputs(X_list, period, n_inputs=N_NEW_INPUTS, random_state=None
     tuple of ndarray of shape (period, n_inputs)
         Empty without a period or without periodic training inputs.
     """
-    periodic = [U for U in X_list if is_periodic(U.shape[0], period)]
-    if period is None or not periodic:
+    periods = training_periods(X_list, period)
+    if not periods:
         return ()
     rng = check_random_state(random_state)
-    periods = [U.reshape(-1, period, U.shape[1]).mean(axis=0) for U in periodic]
     spectra = [np.fft.rfft(P, axis=0) for P in periods]
     out = []
     for k in range(n_inputs):
