@@ -81,7 +81,7 @@ class AveragedRegressor(DynamicRegressorMixin, BaseEstimator):
         one, -1 as many as there are cores; threads, as the library's
         compiled kernels release the GIL), each on BLAS on one thread
         while several run at once (BLAS threaded in each, two F-16 members
-        contended for the cores: 122 s, against 67 s). A member that fits
+        contended for the cores: 123 s, against 66 s). A member that fits
         its own starts in parallel (``n_jobs`` of the decoupled model)
         already uses the cores: keep this at None then.
     random_state : int, RandomState instance or None, default=None

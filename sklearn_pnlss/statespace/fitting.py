@@ -468,8 +468,10 @@ def _sane_on_new_inputs(order, bounded_model, new_inputs, period, training_perio
     verdicts = {}
 
     def passes(k):
-        if k not in verdicts:
-            verdicts[k] = faults(bounded_model(order[k])) == (0, 0)
+        if k not in verdicts:  # the first fault decides: the rest is not simulated
+            cand = bounded_model(order[k])
+            verdicts[k] = (not any(cand.runs_away(U, period, max_periods=NEW_INPUT_PERIODS) for U in new_inputs)
+                           and all(cand.settles(U) for U in training_periods))
         return verdicts[k]
 
     failed, last = 0, len(order) - 1

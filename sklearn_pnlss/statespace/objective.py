@@ -36,7 +36,7 @@ JACOBIAN_BLOCK_BYTES = 128 * 2**20
 # iteration (rows times parameters squared), and single precision runs
 # faster (F-16, 2,893 columns: 1.3 to 1.7 times the double-precision rate
 # on 2 cores; a decoupled F-16 model of 525 parameters, two fitted side by
-# side on one core each: 67 s in double precision, 45 s in single, test
+# side on one core each: 66 s in double precision, 44 s in single, test
 # NRMSE 0.1684 and 0.1689, benchmarks/bench_side_by_side.py) in half the
 # memory. The gradient J^T e is summed in double precision from the same
 # rows, and every step is still accepted or rejected on the cost in double

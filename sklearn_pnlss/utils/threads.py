@@ -110,7 +110,7 @@ def side_by_side_blas(n_jobs, n_tasks):
     Each fit then keeps one core, as in a process of its own. With BLAS
     threaded in each, their Gram matrices contended for the same cores:
     two F-16 decoupled fits side by side (18 states, 525 parameters) took
-    122 s, 67 s on one BLAS thread each, with the same models to four
+    123 s, 66 s on one BLAS thread each, with the same models to four
     digits (``benchmarks/bench_side_by_side.py``).
     """
     return one_blas_thread() if min(effective_n_jobs(n_jobs), n_tasks) > 1 else nullcontext()
