@@ -1637,7 +1637,8 @@ FIGURES = [
     Figure(R, "The next two reach 0.132 (level 6: 0.107 / 0.100 / 0.206), just short of the targets. Every draw has a "
               "member unstable at rest (the draws' largest radii 1.000055 to 1.000110)", LRU,
            lambda: [_lru_pair(1)["mean_nrmse"], 6, *_lru_pair(1)["nrmse"]["6"],
-                    min(_lru(k)["radius_at_rest"] for k in range(4)), max(_lru(k)["radius_at_rest"] for k in range(4))]),
+                    min(_lru(k)["radius_at_rest"] for k in range(4)),
+                    max(_lru(k)["radius_at_rest"] for k in range(4))]),
     Figure(R, "rest, settles (within 200 periods); in the fourth draw one member's 32nd iterate did not, on two of the "
               "four levels, and its 24th is kept: that draw scores 0.146 (level 2: 0.114 / 0.161 / 0.160) where, "
               "unchecked, the member oscillated by itself at level 2", "f16_lru.py's output (its warning); " + LRU,
