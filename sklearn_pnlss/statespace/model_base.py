@@ -269,9 +269,8 @@ class StateSpaceModel:
         A response that contracts steadily is taken to settle as soon as
         its rate, the last three periods' largest ratio of successive state
         changes, brings the change below ``rtol`` within the periods left:
-        a slow but steady approach need not be simulated to the end (it
-        took most of the check's time on the F-16), while a model that
-        oscillates by itself keeps changing at a rate near 1."""
+        a slow but steady approach need not be simulated to the end, while
+        a model that oscillates by itself keeps changing at a rate near 1."""
         x = np.zeros(self.n_states)
         changes = []
         for k in range(max_periods):
