@@ -7,7 +7,8 @@ estimation levels' multisines and sine sweeps (issue 35).
 The model of the band is ``bench_f16.py``'s best decoupled model
 (``DecoupledPNLSSRegressor(18, n_branches=3, degree=5,
 branch_basis="signed_powers", init="random")`` from the BLA of 18 states,
-fitted on the multisines of levels 1, 3, 5 and 7), in two forms: for
+fitted on the multisines of levels 1, 3, 5 and 7, their sine sweeps
+its check records: ``X_check``), in two forms: for
 each of ``--draws`` the mean of two fits from one random start each
 (``AveragedRegressor``, side by side on the two cores; draw ``k``'s
 members are seeded ``2k`` and ``2k + 1``), and for each of
@@ -31,8 +32,11 @@ levels' sine sweeps (from rest), the fit time (the BLA's, the model's and
 the network's) and the parameter counts; then the mean of two draws'
 models (four members, four networks), for each pair of consecutive draws
 (0 and 1, 2 and 3: the same model on seeds it was not chosen on), and the
-mean of all draws. Writes ``results/f16_lru.json``; its ``best`` is the row of
-lowest mean test NRMSE fitted in under ten minutes.
+mean of all draws. Writes ``results/f16_lru.json``; its ``best`` is the
+protocol's model on the first two draws when fitted in under ten minutes
+(without two draws, the row of lowest mean test NRMSE that is): not the
+lowest of all rows, which a single draw can be by chance (draw 0 alone
+scored 0.1242, its pair with draw 1 0.1244).
 """
 import argparse
 import sys
@@ -54,7 +58,8 @@ def draw_rows(name, settings, model, start, start_s, X, y, train_sweeps, test, s
     from sklearn_pnlss import LRUAboveBandRegressor
 
     t0 = time.perf_counter()
-    model.fit(start.transform(X), y)
+    # the estimation levels' sweeps as check records: a member that runs away on one is not returned
+    model.fit(start.transform(X), y, X_check=[d.X[0] for d in train_sweeps])
     model_s = time.perf_counter() - t0
     rows = [bench_f16.entry(name, settings, model, test, start_s + model_s)]
     t0 = time.perf_counter()
@@ -135,8 +140,8 @@ def main(argv=None):
         results["averages"].append(bench_f16.entry(
             f"mean of draws {chosen}: LRUAboveBandRegressor", {"draws": chosen},
             MeanOfMembers([members[s][0] for s in chosen]), test, start_s + sum(members[s][1] for s in chosen)))
-    results["best"] = bench_f16.best_within_budget([row for kind in ("draws", "single") for d in results[kind]
-                                                    for row in d["rows"]] + results["averages"])
+    results["best"] = bench_f16.best_within_budget(results["averages"][:1] or [
+        row for kind in ("draws", "single") for d in results[kind] for row in d["rows"]])
     write_results(results, args.output)
 
 

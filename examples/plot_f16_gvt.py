@@ -268,13 +268,15 @@ if train is not None:
 #   (``benchmarks/f16_clearances.py``). A deep network of linear recurrent
 #   units above the band (``LRUAboveBandRegressor``, the force there gated
 #   by the state, its loss the mean NRMSE, two networks averaged) on the
-#   mean of two single-start fits of the 18-state model reaches 0.125 on
-#   the first draw, 0.133 and 0.129 on the next two; the mean of two such
+#   mean of two single-start fits of the 18-state model reaches 0.124 on
+#   the first draw, 0.133 and 0.130 on the next two; the mean of two such
 #   draws reaches 0.124 in under ten minutes, level 6 below the deep LRU's
-#   figures, and 0.132 on the next two draws, just short. Every draw has a
-#   member unstable at rest; a fit now keeps the latest iterate whose
-#   response to each training level settles, which saved the fourth draw
-#   from a member oscillating by itself at level 2
+#   figures, and 0.132 on the next two draws, just short. Three draws of
+#   four have a member unstable at rest; a fit now keeps the latest iterate
+#   whose response to each training level settles, which saved the fourth
+#   draw from a member oscillating by itself at level 2, and one that runs
+#   away on none of the estimation levels' sweeps (``X_check``), which kept
+#   the first draw from running away on the test sweep of level 6
 #   (``benchmarks/f16_lru.py``).
 # - **Amplitudes between the fitted ones.** Every level drives the same
 #   multisine at another amplitude, so the test levels ask how the response

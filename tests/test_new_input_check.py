@@ -53,6 +53,33 @@ def test_a_model_that_runs_away_on_new_realisations_is_not_returned():
     assert errors[0] > 0 and errors[1] < -25, errors
 
 
+def test_a_model_that_runs_away_on_a_check_record_is_not_returned():
+    """Without the new realisations, five records of the loud level given
+    as ``X_check`` (inputs only, simulated from rest) stop the same
+    runaway: the kept iterate runs away on none of the 15 other records."""
+    truth, X, y = two_levels(n_periods=4, n_realizations=1)
+    X_new, y_new = _data(truth, n_periods=1, n_realizations=20, seed=100, rms=0.5)
+    with mock.patch("sklearn_pnlss.estimators._statespace.random_phase_inputs", lambda *a, **k: ()):
+        with pytest.warns(UserWarning, match="runs away on [1-5] of the 5 check records"):
+            checked = PNLSSRegressor(3, period=N, weighting="noise", max_iter=30, random_state=0).fit(
+                X, y, X_check=list(X_new[:5]))
+    others, y_others = X_new[5:], y_new[5:]
+    assert sum(checked.range_excursion(U[None])[0] > 1 for U in others) == 0
+    assert -checked.score(others, y_others) < -25
+
+
+def test_check_records_must_have_the_training_channels_and_be_finite():
+    truth = _truth(np.random.default_rng(5))
+    X, y = _data(truth, n_periods=2, n_realizations=2, rms=0.3, seed=2)
+    model = PNLSSRegressor(3, period=N, max_iter=2, random_state=0)
+    with pytest.raises(ValueError, match="X_check has 2 input channels but X has 1"):
+        model.fit(X, y, X_check=np.zeros((1, N, 2)))
+    bad = X[:1].copy()
+    bad[0, 3, 0] = np.nan
+    with pytest.raises(ValueError, match="X_check"):
+        model.fit(X, y, X_check=bad)
+
+
 def test_no_check_without_periodic_inputs_and_no_warning_when_it_passes():
     truth = _truth(np.random.default_rng(5))
     X, y = _data(truth, n_periods=4, n_realizations=4, rms=0.3, seed=2)
@@ -113,7 +140,7 @@ def test_the_kept_iterate_is_the_latest_that_settles_on_the_training_inputs():
         def __init__(self, settled):
             self.settled = settled
 
-        def runs_away(self, U, period, max_periods):
+        def runs_away(self, U, period=None, max_periods=None):
             return False
 
         def settles(self, U):

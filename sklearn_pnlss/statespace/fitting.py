@@ -80,6 +80,9 @@ class FitSettings:
     :func:`optimise`). ``training_periods``: one period of each periodic
     training input (user units), whose response, the input repeated from
     rest, the kept iterate must settle into a periodic steady state on.
+    ``check_records``: the user's inputs (user units, any length) of other
+    kinds at the training levels, each simulated from rest, that the kept
+    iterate must not run away on either.
     """
 
     period: int | None = None
@@ -96,6 +99,7 @@ class FitSettings:
     n_threads: int = 1
     new_inputs: tuple = field(default=(), compare=False, repr=False)
     training_periods: tuple = field(default=(), compare=False, repr=False)
+    check_records: tuple = field(default=(), compare=False, repr=False)
 
     def period_of(self, U):
         """``period`` when ``U`` is a periodic steady-state signal, else None."""
@@ -120,8 +124,8 @@ class LMFit:
 @dataclass(frozen=True)
 class NewInputRunaway:
     """The preferred iterate of a fit ran away on new inputs of the
-    training kind, or did not settle on its own training inputs (see
-    :func:`optimise`)."""
+    training kind or on the user's check records, or did not settle on its
+    own training inputs (see :func:`optimise`)."""
 
     iteration: int  # the preferred iterate
     n_runaway: int  # new inputs it ran away on
@@ -129,6 +133,8 @@ class NewInputRunaway:
     kept_iteration: int | None  # None: no iterate passed; the preferred one was kept
     n_unsettled: int = 0  # training inputs whose response it did not settle on
     n_training: int = 0
+    n_records_runaway: int = 0  # check records (X_check) it ran away on
+    n_records: int = 0
 
     def message(self, ranking):
         """The warning an estimator gives; ``ranking``: how the iterates
@@ -140,13 +146,17 @@ class NewInputRunaway:
             faults.append(f"runs away on {self.n_runaway} of {self.n_inputs} new random-phase realisations of the "
                           "training inputs (it leaves the range its nonlinearity was fitted on by more than that "
                           "range's width)")
+        if self.n_records_runaway:
+            faults.append(f"runs away on {self.n_records_runaway} of the {self.n_records} check records (X_check) "
+                          "simulated from rest")
         if self.n_unsettled:
             faults.append(f"does not settle into a periodic response on {self.n_unsettled} of its {self.n_training} "
                           f"periodic training inputs repeated from rest (within {MAX_STEADY_PERIODS} periods: it "
                           "oscillates by itself, which its fit, a period after a short transient, did not see)")
         return (
-            f"The fitted model (iterate {self.iteration}) {' and '.join(faults)}; {kept}. The training data are few "
-            "for this model: give more realisations, validation signals (X_val, y_val), or a smaller model."
+            f"The fitted model (iterate {self.iteration}) {'; and '.join(faults)}; {kept}. The training data "
+            "constrain this model too little there: give more realisations or kinds of input at these levels, "
+            "validation signals (X_val, y_val), or a smaller model."
         )
 
 
@@ -417,9 +427,11 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
             bounded[iterate[0]] = trusted_model(model.with_theta(iterate[1]), segments, settings, objective)
         return bounded[iterate[0]]
 
-    kept, runaway = _sane_on_new_inputs(order, bounded_model, [start.normalise_inputs(U) for U in settings.new_inputs],
-                                        settings.period,
-                                        [start.normalise_inputs(U) for U in settings.training_periods])
+    def normalised(signals):
+        return [start.normalise_inputs(U) for U in signals]
+
+    kept, runaway = _sane_on_new_inputs(order, bounded_model, normalised(settings.new_inputs), settings.period,
+                                        normalised(settings.training_periods), normalised(settings.check_records))
     return LMFit(
         model=start.with_normalised(bounded_model(kept)),
         n_iter=done, best_iteration=kept[0],
@@ -431,11 +443,12 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
     )
 
 
-def _sane_on_new_inputs(order, bounded_model, new_inputs, period, training_periods=()):
+def _sane_on_new_inputs(order, bounded_model, new_inputs, period, training_periods=(), check_records=()):
     """``(kept, runaway)``: the kept iterate, the first of ``order``
     (``(iteration, theta, validation error, cost)``, most wanted first)
     whose ``bounded_model(iterate)`` does not run away on any of
-    ``new_inputs`` (normalised, one period each) and settles into a
+    ``new_inputs`` (normalised, one period each) nor on any of
+    ``check_records`` (normalised, simulated from rest), and settles into a
     periodic steady state on each of ``training_periods`` (normalised, one
     period each, repeated from rest as a prediction seeks it), and None
     when that is the first, else :class:`NewInputRunaway`. The first is
@@ -452,26 +465,27 @@ def _sane_on_new_inputs(order, bounded_model, new_inputs, period, training_perio
     The iterates are probed at 1, 2, 4, ... places down the order, then
     bisected between the last one that failed and the first that passed: a
     few probes rather than every iterate, as a probe that passes simulates
-    every new input."""
-    if not new_inputs and not training_periods:
+    every input."""
+    # each fault the report counts: its name there, the inputs, whether a model fails on one
+    checks = (
+        ("n_runaway", new_inputs, lambda model, U: model.runs_away(U, period, max_periods=NEW_INPUT_PERIODS)),
+        ("n_records_runaway", check_records, lambda model, U: model.runs_away(U)),
+        ("n_unsettled", training_periods, lambda model, U: not model.settles(U)),
+    )
+    if not any(inputs for _, inputs, _ in checks):
         return order[0], None
-
-    def faults(model):
-        runaway = sum(model.runs_away(U, period, max_periods=NEW_INPUT_PERIODS) for U in new_inputs)
-        return runaway, sum(not model.settles(U) for U in training_periods)
-
-    n_first, n_unsettled = faults(bounded_model(order[0]))
-    if n_first == 0 and n_unsettled == 0:
+    first = bounded_model(order[0])
+    counts = {name: sum(fails(first, U) for U in inputs) for name, inputs, fails in checks}
+    if not any(counts.values()):
         return order[0], None
-    report = partial(NewInputRunaway, order[0][0], n_first, len(new_inputs), n_unsettled=n_unsettled,
-                     n_training=len(training_periods))
+    report = partial(NewInputRunaway, order[0][0], n_inputs=len(new_inputs), n_training=len(training_periods),
+                     n_records=len(check_records), **counts)
     verdicts = {}
 
     def passes(k):
         if k not in verdicts:  # the first fault decides: the rest is not simulated
             cand = bounded_model(order[k])
-            verdicts[k] = (not any(cand.runs_away(U, period, max_periods=NEW_INPUT_PERIODS) for U in new_inputs)
-                           and all(cand.settles(U) for U in training_periods))
+            verdicts[k] = not any(fails(cand, U) for _, inputs, fails in checks for U in inputs)
         return verdicts[k]
 
     failed, last = 0, len(order) - 1
@@ -480,8 +494,8 @@ def _sane_on_new_inputs(order, bounded_model, new_inputs, period, training_perio
             break
         failed = probe
     else:
-        return order[0], report(None)
+        return order[0], report(kept_iteration=None)
     while probe - failed > 1:
         middle = (failed + probe) // 2
         failed, probe = (failed, middle) if passes(middle) else (middle, probe)
-    return order[probe], report(order[probe][0])
+    return order[probe], report(kept_iteration=order[probe][0])
