@@ -271,7 +271,9 @@ if train is not None:
 #   mean of two single-start fits of the 18-state model reaches 0.124 on
 #   the first draw, 0.133 and 0.130 on the next two; the mean of two such
 #   draws reaches 0.124 in under ten minutes, level 6 below the deep LRU's
-#   figures, and 0.132 on the next two draws, just short. Three draws of
+#   figures, and 0.132 on the next two draws, just short; the model of the
+#   band spreads over random starts, so a pair of draws at the median lands
+#   near 0.134 (``benchmarks/f16_member_spread.py``). Three draws of
 #   four have a member unstable at rest; a fit now keeps the latest iterate
 #   whose response to each training level settles, which saved the fourth
 #   draw from a member oscillating by itself at level 2, and one that runs
