@@ -31,6 +31,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import bench_f16  # noqa: E402
+import f16_lru  # noqa: E402
 from _bench_utils import RESULTS, header, write_results  # noqa: E402
 from f16_clearances import BASIS, BRANCHES, DEGREE, STATES, load_and_start  # noqa: E402
 
@@ -38,13 +39,10 @@ from f16_clearances import BASIS, BRANCHES, DEGREE, STATES, load_and_start  # no
 PAIR_MEMBERS = 4
 
 
-def fit_draw(draw, Xs, y, check_records):
+def fit_draw(draw, Xs, y, check_records, stable_at_rest=False):
     """Draw ``draw``'s two members, fitted side by side as f16_lru.py's
     draws fit them, with the fits' warnings about the kept iterate."""
-    from sklearn_pnlss import AveragedRegressor
-
-    member = bench_f16.decoupled_estimator(STATES, BRANCHES, DEGREE, branch_basis=BASIS, n_init=1)
-    averaged = AveragedRegressor(member.set_params(n_jobs=1), n_estimators=2, n_jobs=2, random_state=2 * draw)
+    averaged = f16_lru.averaged(draw)[2].set_params(regressor__stable_at_rest=stable_at_rest)
     t0 = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -66,6 +64,8 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--data-dir", default=bench_f16.DEFAULT_DATA)
     parser.add_argument("--seeds", type=int, default=16, help="members fitted (an even number: two per draw)")
+    parser.add_argument("--stable-at-rest", action="store_true",
+                        help="fit the members with stable_at_rest=True (refuse steps unstable at rest)")
     parser.add_argument("--output", default=RESULTS / "f16_member_spread.json")
     args = parser.parse_args(argv)
     if args.seeds < PAIR_MEMBERS or args.seeds % 2:
@@ -75,11 +75,12 @@ def main(argv=None):
     Xs, check_records = start.transform(X), [d.X[0] for d in train_sweeps]
     results = {**header(), "protocol": {"train_levels": bench_f16.TRAIN_LEVELS, "test_levels": bench_f16.TEST_LEVELS},
                "model": {"n_states": STATES, "n_branches": BRANCHES, "degree": DEGREE, "branch_basis": BASIS,
-                         "n_init": 1, "check_records": "the estimation levels' sine sweeps"},
+                         "n_init": 1, "check_records": "the estimation levels' sine sweeps",
+                         "stable_at_rest": args.stable_at_rest},
                "start_s": start_s, "draws": [], "members": []}
     predictions = {}
     for draw in range(args.seeds // 2):
-        members, fit_s, kept = fit_draw(draw, Xs, y, check_records)
+        members, fit_s, kept = fit_draw(draw, Xs, y, check_records, args.stable_at_rest)
         for member in members:
             seed = int(member.random_state)
             predictions[seed] = {lv: member.predict(d.X)[0] for lv, d in test.items()}
