@@ -7,8 +7,8 @@ estimation levels' multisines and sine sweeps (issue 35).
 The model of the band is ``bench_f16.py``'s best decoupled model
 (``DecoupledPNLSSRegressor(18, n_branches=3, degree=5,
 branch_basis="signed_powers", init="random")`` from the BLA of 18 states,
-fitted on the multisines of levels 1, 3, 5 and 7, their sine sweeps
-its check records: ``X_check``), in two forms: for
+fitted on the multisines of levels 1, 3, 5 and 7, with their sine
+sweeps as check records, ``X_check``), in two forms: for
 each of ``--draws`` the mean of two fits from one random start each
 (``AveragedRegressor``, side by side on the two cores; draw ``k``'s
 members are seeded ``2k`` and ``2k + 1``), and for each of
