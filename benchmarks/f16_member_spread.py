@@ -2,7 +2,7 @@
 members of ``f16_lru.py``'s draws, on more seeds than its four draws
 (issue 35).
 
-    python benchmarks/f16_member_spread.py [--seeds 16] [--data-dir DIR] [--output FILE]
+    python benchmarks/f16_member_spread.py [--seeds 16] [--member KEY=VALUE ...] [--data-dir DIR] [--output FILE]
 
 ``f16_lru.py`` scores the model of the protocol, the mean of two draws of
 two members each with networks above the band, on draws 0-1 and 2-3 only:
@@ -18,9 +18,12 @@ iterate its fit kept and why), each consecutive pair of draws' model of
 the band (four members, as ``f16_lru.py``'s pairs have), and every set of
 four members of all those fitted: the spread of the model of the band
 that the networks above it leave as it is. Writes
-``results/f16_member_spread.json``.
+``results/f16_member_spread.json``. ``--member`` changes a member setting
+to measure a variant on the same seeds (``--member degree=3 --member
+n_init=2 --output /tmp/variant.json``).
 """
 import argparse
+import ast
 import itertools
 import sys
 import time
@@ -39,10 +42,11 @@ from f16_clearances import BASIS, BRANCHES, DEGREE, STATES, load_and_start  # no
 PAIR_MEMBERS = 4
 
 
-def fit_draw(draw, Xs, y, check_records, stable_at_rest=False):
+def fit_draw(draw, Xs, y, check_records, member_settings):
     """Draw ``draw``'s two members, fitted side by side as f16_lru.py's
-    draws fit them, with the fits' warnings about the kept iterate."""
-    averaged = f16_lru.averaged(draw)[2].set_params(regressor__stable_at_rest=stable_at_rest)
+    draws fit them but for ``member_settings``, with the fits' warnings
+    about the kept iterate."""
+    averaged = f16_lru.averaged(draw)[2].set_params(**{f"regressor__{k}": v for k, v in member_settings.items()})
     t0 = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -50,6 +54,14 @@ def fit_draw(draw, Xs, y, check_records, stable_at_rest=False):
     fit_s = time.perf_counter() - t0
     kept = [str(w.message) for w in caught if "is kept instead" in str(w.message)]
     return averaged.estimators_, fit_s, kept
+
+
+def _value(text):
+    """A ``--member`` value: a Python literal (3, 0.5, True), else the text."""
+    try:
+        return ast.literal_eval(text)
+    except (ValueError, SyntaxError):
+        return text
 
 
 def score(predictions, test, seeds):
@@ -64,23 +76,25 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--data-dir", default=bench_f16.DEFAULT_DATA)
     parser.add_argument("--seeds", type=int, default=16, help="members fitted (an even number: two per draw)")
-    parser.add_argument("--stable-at-rest", action="store_true",
-                        help="fit the members with stable_at_rest=True (refuse steps unstable at rest)")
+    parser.add_argument("--member", action="append", default=[], metavar="KEY=VALUE",
+                        help="a member setting other than f16_lru.py's (degree=3, n_init=2, stable_at_rest=True)")
     parser.add_argument("--output", default=RESULTS / "f16_member_spread.json")
     args = parser.parse_args(argv)
     if args.seeds < PAIR_MEMBERS or args.seeds % 2:
         parser.error(f"--seeds must be even and at least {PAIR_MEMBERS}")
+    if any("=" not in kv for kv in args.member):
+        parser.error("--member takes KEY=VALUE")
+    member_settings = {k: _value(v) for k, v in (kv.split("=", 1) for kv in args.member)}
 
     X, y, test, train_sweeps, start, start_s = load_and_start(args.data_dir)
     Xs, check_records = start.transform(X), [d.X[0] for d in train_sweeps]
     results = {**header(), "protocol": {"train_levels": bench_f16.TRAIN_LEVELS, "test_levels": bench_f16.TEST_LEVELS},
                "model": {"n_states": STATES, "n_branches": BRANCHES, "degree": DEGREE, "branch_basis": BASIS,
-                         "n_init": 1, "check_records": "the estimation levels' sine sweeps",
-                         "stable_at_rest": args.stable_at_rest},
+                         "n_init": 1, "check_records": "the estimation levels' sine sweeps", **member_settings},
                "start_s": start_s, "draws": [], "members": []}
     predictions = {}
     for draw in range(args.seeds // 2):
-        members, fit_s, kept = fit_draw(draw, Xs, y, check_records, args.stable_at_rest)
+        members, fit_s, kept = fit_draw(draw, Xs, y, check_records, member_settings)
         for member in members:
             seed = int(member.random_state)
             predictions[seed] = {lv: member.predict(d.X)[0] for lv, d in test.items()}
