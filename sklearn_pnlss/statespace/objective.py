@@ -42,8 +42,9 @@ JACOBIAN_BLOCK_BYTES = 128 * 2**20
 # rows, and every step is still accepted or rejected on the cost in double
 # precision: only the metric of the step is rounded (to 1e-7 of the largest
 # column, which the damping dominates), so the fit cannot end worse, and it
-# stops where the gradient vanishes as before. Smaller models keep double precision throughout:
-# their iterations wait on the recursion and the simulations, not on J^T J.
+# stops where the gradient vanishes as before. Smaller models keep double
+# precision throughout: their iterations wait on the recursion and the
+# simulations, not on J^T J.
 SINGLE_PRECISION_PARAMS = 512
 
 
