@@ -7,20 +7,25 @@ members of ``f16_lru.py``'s draws, on more seeds than its four draws
 ``f16_lru.py`` scores the model of the protocol, the mean of two draws of
 two members each with networks above the band, on draws 0-1 and 2-3 only:
 four seeds of a random start per pair, too few to say where a pair of
-draws usually lands. Its networks (172 to 175 s a draw) make more draws
-dear; its members (about 50 s a pair) do not. This script fits
+draws usually lands. Its networks (175 to 200 s a draw) make more draws
+dear; its members (about 90 s a pair) do not. This script fits
 ``--seeds`` members exactly as ``f16_lru.py``'s draws do (draw ``k``'s
 members seeded ``2k`` and ``2k + 1``, two side by side,
-``DecoupledPNLSSRegressor(18, 3, 5, signed_powers)`` from one random
-start each, the estimation levels' sweeps as check records), and scores
-on the test multisines (periodic steady state): each member (with the
-iterate its fit kept and why), each consecutive pair of draws' model of
-the band (four members, as ``f16_lru.py``'s pairs have), and every set of
-four members of all those fitted: the spread of the model of the band
-that the networks above it leave as it is. Writes
-``results/f16_member_spread.json``. ``--member`` changes a member setting
-to measure a variant on the same seeds (``--member degree=3 --member
-n_init=2 --output /tmp/variant.json``).
+``DecoupledPNLSSRegressor(18, 3, 3, signed_powers)``, each the better of
+two random starts, the estimation levels' sweeps as check records), and
+scores each member (with the iterate its fit kept and why), each
+consecutive pair of draws' model of the band (four members, as
+``f16_lru.py``'s pairs have), and every set of four members of all those
+fitted: the spread of the model of the band that the networks above it
+leave as it is. Each is scored twice: on the test multisines (periodic
+steady state), and, as data no choice of member settings need be made
+on the test levels alone, on the estimation levels' sweeps simulated
+from rest, inside the excited band (which the fits only check for
+runaways; each member's excursion past its trusted range on them is
+recorded too). Writes ``results/f16_member_spread.json``. ``--member``
+changes a member setting to measure a variant on the same seeds
+(``--member degree=5 --member n_init=1 --output /tmp/variant.json``: the
+members of the earlier runs, ``bench_f16.py``'s model from one start).
 """
 import argparse
 import ast
@@ -36,7 +41,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import bench_f16  # noqa: E402
 import f16_lru  # noqa: E402
 from _bench_utils import RESULTS, header, write_results  # noqa: E402
-from f16_clearances import BASIS, BRANCHES, DEGREE, STATES, load_and_start  # noqa: E402
+from f16_clearances import load_and_start  # noqa: E402
 
 # members of a model of the band in f16_lru.py's pair of draws
 PAIR_MEMBERS = 4
@@ -72,12 +77,36 @@ def score(predictions, test, seeds):
     return per_level, float(np.mean([v for row in per_level.values() for v in row]))
 
 
+def in_band_error(prediction, y):
+    """The error of ``prediction`` (samples, outputs) inside the excited
+    band, below ``bench_f16.BAND_EDGES[1]`` (a model of the band is not
+    asked for more), in time."""
+    spectrum = np.fft.rfft(prediction - y, axis=0)
+    spectrum[np.fft.rfftfreq(len(y), d=1 / 400.0) >= bench_f16.BAND_EDGES[1]] = 0
+    return np.fft.irfft(spectrum, n=len(y), axis=0)
+
+
+def score_in_band(grams, seeds):
+    """The mean over levels and outputs of the in-band NRMSE of the mean
+    of ``seeds``' simulations: the squared norm of a mean of errors is the
+    mean of their inner products, so ``grams`` (per level, the members'
+    in-band errors' inner products over the output's power, (members,
+    members, outputs)) scores every set without simulating it again."""
+    return float(np.mean([np.sqrt(gram[np.ix_(seeds, seeds)].sum(axis=(0, 1))) / len(seeds) for gram in grams]))
+
+
+def quantiles(values):
+    """min, p10, median, p90 and max of ``values``."""
+    return {k: float(v) for k, v in zip(("min", "p10", "median", "p90", "max"),
+                                        np.quantile(values, [0, 0.1, 0.5, 0.9, 1.0]))}
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--data-dir", default=bench_f16.DEFAULT_DATA)
     parser.add_argument("--seeds", type=int, default=16, help="members fitted (an even number: two per draw)")
     parser.add_argument("--member", action="append", default=[], metavar="KEY=VALUE",
-                        help="a member setting other than f16_lru.py's (degree=3, n_init=2, stable_at_rest=True)")
+                        help="a member setting other than f16_lru.py's (degree=5, n_init=1, stable_at_rest=True)")
     parser.add_argument("--output", default=RESULTS / "f16_member_spread.json")
     args = parser.parse_args(argv)
     if args.seeds < PAIR_MEMBERS or args.seeds % 2:
@@ -88,40 +117,58 @@ def main(argv=None):
 
     X, y, test, train_sweeps, start, start_s = load_and_start(args.data_dir)
     Xs, check_records = start.transform(X), [d.X[0] for d in train_sweeps]
+    # the estimation levels' sweeps, scored so that no choice of member settings need rest on the test levels alone
+    sweeps = dict(zip(bench_f16.TRAIN_LEVELS, train_sweeps))
     results = {**header(), "protocol": {"train_levels": bench_f16.TRAIN_LEVELS, "test_levels": bench_f16.TEST_LEVELS},
-               "model": {"n_states": STATES, "n_branches": BRANCHES, "degree": DEGREE, "branch_basis": BASIS,
-                         "n_init": 1, "check_records": "the estimation levels' sine sweeps", **member_settings},
+               "model": {**f16_lru.decoupled(f16_lru.MEMBER_DEGREE)[1], "n_init": f16_lru.MEMBER_STARTS,
+                         "check_records": "the estimation levels' sine sweeps", **member_settings},
                "start_s": start_s, "draws": [], "members": []}
-    predictions = {}
+    predictions, sweep_errors = {}, {}
     for draw in range(args.seeds // 2):
         members, fit_s, kept = fit_draw(draw, Xs, y, check_records, member_settings)
         for member in members:
             seed = int(member.random_state)
             predictions[seed] = {lv: member.predict(d.X)[0] for lv, d in test.items()}
+            sweep_errors[seed] = {lv: in_band_error(bench_f16.prediction_from_rest(member, d.X[0]), d.y[0])
+                                  for lv, d in sweeps.items()}
+            on_sweeps = {str(lv): (np.sqrt(np.sum(sweep_errors[seed][lv] ** 2, axis=0) / np.sum(d.y[0] ** 2, axis=0))
+                                   .tolist()) for lv, d in sweeps.items()}
+            sweeps_mean = float(np.mean(list(on_sweeps.values())))
             per_level, mean = score(predictions, test, [seed])
             results["members"].append({
-                "seed": seed, "mean_nrmse": mean, "nrmse": per_level, "n_iter": int(member.n_iter_),
+                "seed": seed, "mean_nrmse": mean, "nrmse": per_level, "estimation_sweeps_in_band": on_sweeps,
+                "estimation_sweeps_in_band_mean": sweeps_mean, "n_iter": int(member.n_iter_),
+                # how far past its trusted range each sweep takes the member (a runaway from 1 on)
+                "estimation_sweeps_excursion": dict(zip(map(str, sweeps), member.range_excursion(
+                    [d.X[0] for d in sweeps.values()]).tolist())),
                 "kept_iteration": int(member.best_iteration_), "radius_at_rest": bench_f16.radius_at_rest(member)})
-            print(f"seed {seed:2d}: mean {mean:.4f}  L2 {np.mean(per_level['2']):.3f}  iterate "
-                  f"{member.best_iteration_} of {member.n_iter_}", flush=True)
+            print(f"seed {seed:2d}: mean {mean:.4f}  L2 {np.mean(per_level['2']):.3f}  sweeps {sweeps_mean:.4f}  "
+                  f"iterate {member.best_iteration_} of {member.n_iter_}", flush=True)
         results["draws"].append({"draw": draw, "seeds": [int(m.random_state) for m in members], "fit_s": fit_s,
                                  "kept_earlier": kept})
         write_results(results, args.output)
 
-    seeds = sorted(predictions)
+    seeds = sorted(predictions)  # 0 to --seeds - 1: a member's seed is its row in the grams
+    errors = {lv: np.array([sweep_errors[s][lv] for s in seeds]) for lv in sweeps}
+    grams = [np.einsum("snk,tnk->stk", errors[lv], errors[lv]) / np.sum(d.y[0] ** 2, axis=0)
+             for lv, d in sweeps.items()]
     pairs = [seeds[i:i + PAIR_MEMBERS] for i in range(0, len(seeds) - PAIR_MEMBERS + 1, PAIR_MEMBERS)]
-    every = np.array([score(predictions, test, list(c))[1] for c in itertools.combinations(seeds, PAIR_MEMBERS)])
+    sets = [list(c) for c in itertools.combinations(seeds, PAIR_MEMBERS)]
+    every = np.array([score(predictions, test, c)[1] for c in sets])
     results["pairs_of_draws"] = []
     for chosen in pairs:
         per_level, mean = score(predictions, test, chosen)
         results["pairs_of_draws"].append({"seeds": chosen, "mean_nrmse": mean, "nrmse": per_level,
-                                          "fraction_of_sets_below": float(np.mean(every < mean))})
+                                          "fraction_of_sets_below": float(np.mean(every < mean)),
+                                          "estimation_sweeps_in_band_mean": score_in_band(grams, chosen)})
         print(f"pair of draws, members {chosen}: mean {mean:.4f} (below it: {np.mean(every < mean):.0%} of the sets "
               f"of {PAIR_MEMBERS})", flush=True)
-    quantiles = dict(zip(("min", "p10", "median", "p90", "max"), np.quantile(every, [0, 0.1, 0.5, 0.9, 1.0])))
-    results["every_set_of_four"] = {"n_sets": int(every.size), **{k: float(v) for k, v in quantiles.items()}}
-    print(f"every set of {PAIR_MEMBERS} of the {len(seeds)} members ({every.size}): "
-          + ", ".join(f"{k} {v:.4f}" for k, v in quantiles.items()), flush=True)
+    results["every_set_of_four"] = {"n_sets": int(every.size), **quantiles(every)}
+    on_sweeps = quantiles([score_in_band(grams, c) for c in sets])
+    results["every_set_of_four_on_estimation_sweeps"] = on_sweeps
+    for name, spread in (("test multisines", results["every_set_of_four"]), ("estimation sweeps, in band", on_sweeps)):
+        print(f"every set of {PAIR_MEMBERS} of the {len(seeds)} members ({every.size}), {name}: "
+              + ", ".join(f"{k} {spread[k]:.4f}" for k in ("min", "p10", "median", "p90", "max")), flush=True)
     write_results(results, args.output)
 
 
