@@ -87,9 +87,10 @@ N_NETWORKS = 2
 # level then fails)
 N_MEMBERS = 2
 # A member's branches are cubic, each member the better of two random starts: over f16_member_spread.py's 16
-# seeds, every set of four such members scored 0.161-0.183 (median 0.173) against 0.166-0.190 (median 0.177) for
-# single-start fifth-degree members (bench_f16.py's), half of which kept an earlier iterate because the last ran
-# away; cubic members from one start were no better (one of 16 stalled at 0.37).
+# seeds, every set of four such members scored 0.161-0.183 (median 0.173) on the test multisines against
+# 0.166-0.190 (median 0.177) for single-start fifth-degree members (bench_f16.py's), half of which kept an earlier
+# iterate because the last ran away; cubic members from one start were no better (one of 16 stalled at 0.37). On
+# the estimation levels' sweeps the cubic members are not better (median 0.200 against 0.186 in the band).
 MEMBER_DEGREE, MEMBER_STARTS = 3, 2
 
 

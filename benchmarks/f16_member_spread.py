@@ -18,11 +18,11 @@ consecutive pair of draws' model of the band (four members, as
 ``f16_lru.py``'s pairs have), and every set of four members of all those
 fitted: the spread of the model of the band that the networks above it
 leave as it is. Each is scored twice: on the test multisines (periodic
-steady state), and, as data no choice of member settings need be made
-on the test levels alone, on the estimation levels' sweeps simulated
-from rest, inside the excited band (which the fits only check for
-runaways; each member's excursion past its trusted range on them is
-recorded too). Writes ``results/f16_member_spread.json``. ``--member``
+steady state), and, so that no choice of member settings need rest on
+the test levels alone, on the estimation levels' sweeps simulated from
+rest, inside the excited band (which the fits only check for runaways;
+each member's excursion past its trusted range on them is recorded
+too). Writes ``results/f16_member_spread.json``. ``--member``
 changes a member setting to measure a variant on the same seeds
 (``--member degree=5 --member n_init=1 --output /tmp/variant.json``: the
 members of the earlier runs, ``bench_f16.py``'s model from one start).
