@@ -135,6 +135,7 @@ class NewInputRunaway:
     n_training: int = 0
     n_records_runaway: int = 0  # check records (X_check) it ran away on
     n_records: int = 0
+    runaway_records: tuple = ()  # their places in X_check, for the warning to name them
 
     def message(self, ranking):
         """The warning an estimator gives; ``ranking``: how the iterates
@@ -147,8 +148,9 @@ class NewInputRunaway:
                           "training inputs (it leaves the range its nonlinearity was fitted on by more than that "
                           "range's width)")
         if self.n_records_runaway:
-            faults.append(f"runs away on {self.n_records_runaway} of the {self.n_records} check records (X_check) "
-                          "simulated from rest")
+            named = ", ".join(f"X_check[{i}]" for i in self.runaway_records)
+            faults.append(f"runs away on {self.n_records_runaway} of the {self.n_records} check records "
+                          f"({named or 'X_check'}) simulated from rest")
         if self.n_unsettled:
             faults.append(f"does not settle into a periodic response on {self.n_unsettled} of its {self.n_training} "
                           f"periodic training inputs repeated from rest (within {MAX_STEADY_PERIODS} periods: it "
@@ -475,11 +477,12 @@ def _sane_on_new_inputs(order, bounded_model, new_inputs, period, training_perio
     if not any(inputs for _, inputs, _ in checks):
         return order[0], None
     first = bounded_model(order[0])
-    counts = {name: sum(fails(first, U) for U in inputs) for name, inputs, fails in checks}
-    if not any(counts.values()):
+    failing = {name: [i for i, U in enumerate(inputs) if fails(first, U)] for name, inputs, fails in checks}
+    if not any(failing.values()):
         return order[0], None
     report = partial(NewInputRunaway, order[0][0], n_inputs=len(new_inputs), n_training=len(training_periods),
-                     n_records=len(check_records), **counts)
+                     n_records=len(check_records), runaway_records=tuple(failing["n_records_runaway"]),
+                     **{name: len(places) for name, places in failing.items()})
     verdicts = {}
 
     def passes(k):
