@@ -472,8 +472,7 @@ def _sweep_miss(seed, level):
 def _sweep_sound():
     """The spread's members that miss no estimation sweep by more than its
     output."""
-    return [m for m in _spread()["members"] if m["estimation_sweeps_in_band_mean"] <= 1
-            and max(map(statistics.mean, m["estimation_sweeps_in_band"].values())) <= 1]
+    return [m for m in _spread()["members"] if max(map(statistics.mean, m["estimation_sweeps_in_band"].values())) <= 1]
 
 
 def _jumpers(spread):
@@ -1741,6 +1740,18 @@ FIGURES = [
            lambda: [2, len(_lru_pair(0)["model"]["draws"]) * _lru(0)["n_above_band_params"],
                     len(_lru_pair(0)["model"]["draws"]) * _lru(0)["model"]["n_estimators"] * _n_decoupled(3, 3, n=18),
                     _lru_pair(0)["mean_nrmse"], _lru_pair(0)["fit_s"]]),
+    Figure(PN, "fifth-degree members, at commit b55f8ad) the last iterate of a member of the first draw ran away on "
+               "the sweep of level 7, and on none of the 40 realisations; with the estimation levels' sweeps as "
+               "``X_check`` its 34th iterate was kept, and the draw scored 0.213 on the test levels' sweeps (1.82 "
+               "unchecked) and 0.124 on their multisines both ways", B55F8AD + "; unchecked: the run of commit 204084f",
+           lambda: [7, importlib.import_module("sklearn_pnlss.statespace.new_inputs").N_NEW_INPUTS, 34, 0.213,
+                    1.82, 0.124]),
+    Figure(PN, "it repeats the period from rest until the state repeats (at most 200 periods)", "the model's rule",
+           lambda: [importlib.import_module("sklearn_pnlss.statespace.model_base").MAX_STEADY_PERIODS]),
+    Figure(PN, "members, at commit b55f8ad) one member of a draw stopped settling on two levels in its last eight "
+               "iterations; its iterate 24 of 32 took the pair of draws it belonged to from failing the test level "
+               "between two fitted ones to 0.132 in the mean", B55F8AD + " (its warning)",
+           lambda: [24, 32, 0.132]),
     Figure(R, "six layers of 100 states", "Forgione et al., CDC 2024, the case study", lambda: [None]),
     Figure(R, "It has 51 nonlinear parameters where the full model in the states and input has 90 "
               "(the states-only model above: 48)", "the models' structure",
