@@ -133,9 +133,8 @@ class NewInputRunaway:
     kept_iteration: int | None  # None: no iterate passed; the preferred one was kept
     n_unsettled: int = 0  # training inputs whose response it did not settle on
     n_training: int = 0
-    n_records_runaway: int = 0  # check records (X_check) it ran away on
+    runaway_records: tuple = ()  # the check records (places in X_check) it ran away on, for the warning to name
     n_records: int = 0
-    runaway_records: tuple = ()  # their places in X_check, for the warning to name them
 
     def message(self, ranking):
         """The warning an estimator gives; ``ranking``: how the iterates
@@ -147,10 +146,10 @@ class NewInputRunaway:
             faults.append(f"runs away on {self.n_runaway} of {self.n_inputs} new random-phase realisations of the "
                           "training inputs (it leaves the range its nonlinearity was fitted on by more than that "
                           "range's width)")
-        if self.n_records_runaway:
+        if self.runaway_records:
             named = ", ".join(f"X_check[{i}]" for i in self.runaway_records)
-            faults.append(f"runs away on {self.n_records_runaway} of the {self.n_records} check records "
-                          f"({named or 'X_check'}) simulated from rest")
+            faults.append(f"runs away on {len(self.runaway_records)} of the {self.n_records} check records ({named}) "
+                          "simulated from rest")
         if self.n_unsettled:
             faults.append(f"does not settle into a periodic response on {self.n_unsettled} of its {self.n_training} "
                           f"periodic training inputs repeated from rest (within {MAX_STEADY_PERIODS} periods: it "
@@ -468,10 +467,10 @@ def _sane_on_new_inputs(order, bounded_model, new_inputs, period, training_perio
     bisected between the last one that failed and the first that passed: a
     few probes rather than every iterate, as a probe that passes simulates
     every input."""
-    # each fault the report counts: its name there, the inputs, whether a model fails on one
+    # each fault the report holds: its field there, the inputs, whether a model fails on one
     checks = (
         ("n_runaway", new_inputs, lambda model, U: model.runs_away(U, period, max_periods=NEW_INPUT_PERIODS)),
-        ("n_records_runaway", check_records, lambda model, U: model.runs_away(U)),
+        ("runaway_records", check_records, lambda model, U: model.runs_away(U)),
         ("n_unsettled", training_periods, lambda model, U: not model.settles(U)),
     )
     if not any(inputs for _, inputs, _ in checks):
@@ -481,8 +480,8 @@ def _sane_on_new_inputs(order, bounded_model, new_inputs, period, training_perio
     if not any(failing.values()):
         return order[0], None
     report = partial(NewInputRunaway, order[0][0], n_inputs=len(new_inputs), n_training=len(training_periods),
-                     n_records=len(check_records), runaway_records=tuple(failing["n_records_runaway"]),
-                     **{name: len(places) for name, places in failing.items()})
+                     n_records=len(check_records), runaway_records=tuple(failing["runaway_records"]),
+                     n_runaway=len(failing["n_runaway"]), n_unsettled=len(failing["n_unsettled"]))
     verdicts = {}
 
     def passes(k):
