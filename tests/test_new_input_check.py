@@ -140,8 +140,8 @@ def test_the_kept_iterate_is_the_latest_that_settles_on_the_training_inputs():
         def __init__(self, settled):
             self.settled = settled
 
-        def runs_away(self, U, period=None, max_periods=None):
-            return False
+        def runaways_in_turn(self, inputs, stop_at_first=False):
+            return []
 
         def settles(self, U):
             return self.settled or U[0, 0] > 0  # the second training input settles for every iterate
@@ -149,11 +149,11 @@ def test_the_kept_iterate_is_the_latest_that_settles_on_the_training_inputs():
     order = [(k, None, np.nan, 1.0) for k in range(10, -1, -1)]
     models = {k: StandIn(k <= 8) for k in range(11)}
     training = [np.zeros((4, 1)), np.ones((4, 1))]
-    kept, report = _sane_on_new_inputs(order, lambda it: models[it[0]], [np.zeros((4, 1))], 4, training)
+    kept, report = _sane_on_new_inputs(order, lambda it: models[it[0]], [np.zeros((4, 1))], training)
     assert kept[0] == 8
     assert (report.n_runaway, report.n_unsettled, report.n_training, report.kept_iteration) == (0, 1, 2, 8)
     message = report.message("the latest")
     assert "does not settle into a periodic response on 1 of its 2 periodic training inputs" in message
     assert "runs away" not in message and "iterate 8 is kept instead" in message
-    settled, none = _sane_on_new_inputs(order[2:], lambda it: models[it[0]], [], 4, training)
+    settled, none = _sane_on_new_inputs(order[2:], lambda it: models[it[0]], [], training)
     assert settled[0] == 8 and none is None

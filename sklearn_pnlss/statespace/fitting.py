@@ -44,13 +44,6 @@ TIME_DOMAIN_WEIGHTINGS = (None, "relative")
 # level it was validated at.
 AMPLIFIED_VALIDATION = 1.2
 
-# Periods simulated at most per new input in search of its steady state:
-# the last one is then checked. A model whose orbit runs away seldom
-# becomes periodic, so each such check took the full 200 periods
-# (Bouc-Wen (3, 5, 7) on three realisations: 41 s of a 65 s fit).
-NEW_INPUT_PERIODS = 20
-
-
 # Callbacks told of every Levenberg-Marquardt iteration (see iteration_listener).
 _LISTENERS = []
 
@@ -431,7 +424,7 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
     def normalised(signals):
         return [start.normalise_inputs(U) for U in signals]
 
-    kept, runaway = _sane_on_new_inputs(order, bounded_model, normalised(settings.new_inputs), settings.period,
+    kept, runaway = _sane_on_new_inputs(order, bounded_model, normalised(settings.new_inputs),
                                         normalised(settings.training_periods), normalised(settings.check_records))
     return LMFit(
         model=start.with_normalised(bounded_model(kept)),
@@ -444,11 +437,12 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
     )
 
 
-def _sane_on_new_inputs(order, bounded_model, new_inputs, period, training_periods=(), check_records=()):
+def _sane_on_new_inputs(order, bounded_model, new_inputs, training_periods=(), check_records=()):
     """``(kept, runaway)``: the kept iterate, the first of ``order``
     (``(iteration, theta, validation error, cost)``, most wanted first)
     whose ``bounded_model(iterate)`` does not run away on any of
-    ``new_inputs`` (normalised, one period each) nor on any of
+    ``new_inputs`` (normalised, one period each, simulated in turn as one
+    record: see ``runaways_in_turn``) nor on any of
     ``check_records`` (normalised, simulated from rest), and settles into a
     periodic steady state on each of ``training_periods`` (normalised, one
     period each, repeated from rest as a prediction seeks it), and None
@@ -467,16 +461,20 @@ def _sane_on_new_inputs(order, bounded_model, new_inputs, period, training_perio
     bisected between the last one that failed and the first that passed: a
     few probes rather than every iterate, as a probe that passes simulates
     every input."""
-    # each fault the report holds: its field there, the inputs, whether a model fails on one
+    # each fault the report holds: its field there, the inputs, the places in them a model fails on
+    # (for a verdict, as far as the first: the rest need not be simulated)
     checks = (
-        ("n_runaway", new_inputs, lambda model, U: model.runs_away(U, period, max_periods=NEW_INPUT_PERIODS)),
-        ("runaway_records", check_records, lambda model, U: model.runs_away(U)),
-        ("n_unsettled", training_periods, lambda model, U: not model.settles(U)),
+        ("n_runaway", new_inputs,
+         lambda model, inputs, verdict: model.runaways_in_turn(inputs, stop_at_first=verdict)),
+        ("runaway_records", check_records,
+         lambda model, inputs, verdict: (i for i, U in enumerate(inputs) if model.runs_away(U))),
+        ("n_unsettled", training_periods,
+         lambda model, inputs, verdict: (i for i, U in enumerate(inputs) if not model.settles(U))),
     )
     if not any(inputs for _, inputs, _ in checks):
         return order[0], None
     first = bounded_model(order[0])
-    failing = {name: [i for i, U in enumerate(inputs) if fails(first, U)] for name, inputs, fails in checks}
+    failing = {name: list(faults(first, inputs, False)) for name, inputs, faults in checks}
     if not any(failing.values()):
         return order[0], None
     report = partial(NewInputRunaway, order[0][0], n_inputs=len(new_inputs), n_training=len(training_periods),
@@ -487,7 +485,7 @@ def _sane_on_new_inputs(order, bounded_model, new_inputs, period, training_perio
     def passes(k):
         if k not in verdicts:  # the first fault decides: the rest is not simulated
             cand = bounded_model(order[k])
-            verdicts[k] = not any(fails(cand, U) for _, inputs, fails in checks for U in inputs)
+            verdicts[k] = not any(True for _, inputs, faults in checks for _ in faults(cand, inputs, True))
         return verdicts[k]
 
     failed, last = 0, len(order) - 1

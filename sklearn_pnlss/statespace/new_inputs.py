@@ -58,18 +58,17 @@ def random_phase_inputs(X_list, period, n_inputs=N_NEW_INPUTS, random_state=None
     if not periods:
         return ()
     rng = check_random_state(random_state)
-    spectra = [np.fft.rfft(P, axis=0) for P in periods]
-    out = []
-    for k in range(n_inputs):
-        spectrum, reference = spectra[k % len(spectra)], periods[k % len(periods)]
-        new = np.abs(spectrum) * np.exp(2j * np.pi * rng.random_sample(spectrum.shape))
-        new[0] = spectrum[0]
-        if period % 2 == 0:
-            new[-1] = spectrum[-1]  # the Nyquist bin of a real signal is real
-        mean = spectrum[0].real / period
-        varying = np.fft.irfft(new, period, axis=0) - mean
-        peak = np.max(np.abs(varying), axis=0)
-        allowed = np.max(np.abs(reference - mean), axis=0)
-        scale = np.minimum(1.0, allowed / np.where(peak > 0, peak, 1.0))
-        out.append(mean + varying * scale)
-    return tuple(out)
+    # the k-th realisation from the (k mod P)-th of the P training periods,
+    # all drawn at once: the same phases, in the same order, as one at a time
+    references = np.stack([periods[k % len(periods)] for k in range(n_inputs)])
+    spectra = np.fft.rfft(references, axis=1)
+    new = np.abs(spectra) * np.exp(2j * np.pi * rng.random_sample(spectra.shape))
+    new[:, 0] = spectra[:, 0]
+    if period % 2 == 0:
+        new[:, -1] = spectra[:, -1]  # the Nyquist bin of a real signal is real
+    mean = spectra[:, :1].real / period
+    varying = np.fft.irfft(new, period, axis=1) - mean
+    peak = np.max(np.abs(varying), axis=1, keepdims=True)
+    allowed = np.max(np.abs(references - mean), axis=1, keepdims=True)
+    scale = np.minimum(1.0, allowed / np.where(peak > 0, peak, 1.0))
+    return tuple(mean + varying * scale)

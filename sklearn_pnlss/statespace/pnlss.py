@@ -4,7 +4,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..utils.threads import over_column_spans
-from ._pnlss_kernels import pnlss_jacobian, pnlss_simulate
+from ._pnlss_kernels import pnlss_excursions_in_turn, pnlss_jacobian, pnlss_simulate
 from .model_base import DivergenceError, Segment, StateSpaceModel, unbounded
 
 __all__ = ["PNLSSModel", "Segment"]
@@ -93,6 +93,11 @@ class PNLSSModel(StateSpaceModel):
     def _run(self, U, x0):
         lo, hi = self._bounds()
         return pnlss_simulate(self.A, self.B, self.C, self.D, self.E, self.F, self.exE, self.exF, lo, hi, U, x0)
+
+    def _excursions_in_turn(self, U, n_records, r0, r1, factor, stop_at_first, out):
+        lo, hi = self._bounds()
+        pnlss_excursions_in_turn(self.A, self.B, self.E, self.exE, lo, hi, U, n_records, r0, r1, factor,
+                                 stop_at_first, out)
 
     def _span_columns(self):
         """The fewest columns of the sensitivity recursion worth a thread
