@@ -1,6 +1,7 @@
 """The fitted model is checked on new realisations of its training inputs:
 an iterate that runs away on them is not returned."""
 import warnings
+from dataclasses import replace
 from unittest import mock
 
 import numpy as np
@@ -157,3 +158,25 @@ def test_the_kept_iterate_is_the_latest_that_settles_on_the_training_inputs():
     assert "runs away" not in message and "iterate 8 is kept instead" in message
     settled, none = _sane_on_new_inputs(order[2:], lambda it: models[it[0]], [], training)
     assert settled[0] == 8 and none is None
+
+
+@pytest.mark.parametrize("radius", [0.95, 1.05])
+def test_records_simulated_side_by_side_match_one_input_at_a_time(radius):
+    """A PNLSS model's kernel simulates the check's records side by side
+    with the arithmetic of one input at a time: the same excursions, inf
+    where the state diverges (radius 1.05: unstable once its cubic is
+    held at the edge of its trusted range)."""
+    from sklearn_pnlss.statespace.model_base import StateSpaceModel
+
+    model = replace(_oscillator(radius), bounds=np.array([[-0.6, 0.6], [-0.5, 0.7], [-np.inf, np.inf]]))
+    rng = np.random.default_rng(4)
+    U = np.stack([a * rng.standard_normal((400, 1)) for a in np.linspace(0.2, 6.0, 13)])
+    side_by_side, one_at_a_time = np.full(13, np.nan), np.full(13, np.nan)
+    model._excursions_in_turn(U, 4, 0, 4, 1.0, False, side_by_side)
+    StateSpaceModel._excursions_in_turn(model, U, 4, 0, 4, 1.0, False, one_at_a_time)
+    assert np.array_equal(side_by_side, one_at_a_time)
+    away = np.flatnonzero(one_at_a_time > 1.0)
+    assert 0 < away.size < 13 and (radius < 1 or np.isinf(one_at_a_time).any())
+    assert np.array_equal(model.runaways_in_turn(list(U)), away)
+    assert model.runaways_in_turn(list(U), stop_at_first=True).size >= 1
+    assert model.runaways_in_turn(list(U[:2])).size == 0  # the quiet ones alone

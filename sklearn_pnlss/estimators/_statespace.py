@@ -73,23 +73,25 @@ class StateSpaceRegressorBase(SignalRegressorBase):
             With or without them, when the training inputs are periodic the
             kept iterate is simulated on 40 new random-phase realisations of
             their spectra (seeded by ``random_state``; peaks no higher than
-            the training inputs'). If it runs away on any (leaves its trusted
-            range by more than the range's width, see ``range_excursion``),
-            an earlier iterate that does not is kept instead (the latest, or
-            the next best on the validation signals), with a warning: the
-            data are then few for the model. A PNLSS (3, 5, 7) Bouc-Wen
-            model on three realisations of two periods ran away on one or two
-            of 14 new realisations of its level for four of six data draws
-            (rms errors of 4 to 40 m, 12 to 32 dB, against -76 dB for the
-            linear start), and on none with the check
+            the training inputs'), dealt to 8 records of 5 each simulated in
+            turn from rest: a period per realisation, the switch between two a
+            transient as in a measurement. If it runs away on any (leaves its
+            trusted range by more than the range's width, see
+            ``range_excursion``), an earlier iterate that does not is kept
+            instead (the latest, or the next best on the validation signals),
+            with a warning: the data are then few for the model. A PNLSS
+            (3, 5, 7) Bouc-Wen model on three realisations of two periods ran
+            away on one or two of 14 new realisations of its level for four of
+            six data draws (rms errors of 4 to 40 m, 12 to 32 dB, against -76
+            dB for the linear start), and on none with the check
             (``benchmarks/bench_small_data.py``). The kept iterate must also
             settle into a periodic steady state on each periodic training
             input repeated from rest, as :meth:`predict` seeks it: the cost
             scores a period after a transient of at most a period, where a
             model that oscillates by itself, its response drifting a little
             each period, costs no more (F-16 decoupled models unstable at
-            rest, ``benchmarks/f16_lru.py``: such a model fails the test
-            level between two fitted ones).
+            rest, ``benchmarks/f16_lru.py``: such a model fails the test level
+            between two fitted ones).
         X_check : signals or None, default=None
             Inputs measured at the training levels but of other kinds than
             the training inputs (a sine sweep beside multisines, an impact),
