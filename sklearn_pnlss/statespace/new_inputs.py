@@ -63,13 +63,14 @@ def random_phase_inputs(X_list, period, n_inputs=N_NEW_INPUTS, random_state=None
     rng = check_random_state(random_state)
     # the k-th realisation from the (k mod P)-th of the P training periods,
     # all drawn at once: the same phases, in the same order, as one at a time
-    references = np.stack([periods[k % len(periods)] for k in range(n_inputs)])
-    spectra = np.fft.rfft(references, axis=1)
-    new = np.abs(spectra) * _unit_phasors(rng.random_sample(spectra.shape))
-    new[:, 0] = spectra[:, 0]
+    of_period = np.arange(n_inputs) % len(periods)
+    references = np.stack(periods)[of_period]
+    spectra = np.fft.rfft(np.stack(periods), axis=1)
+    new = np.abs(spectra)[of_period] * _unit_phasors(rng.random_sample((n_inputs, *spectra.shape[1:])))
+    new[:, 0] = spectra[of_period, 0]
     if period % 2 == 0:
-        new[:, -1] = spectra[:, -1]  # the Nyquist bin of a real signal is real
-    mean = spectra[:, :1].real / period
+        new[:, -1] = spectra[of_period, -1]  # the Nyquist bin of a real signal is real
+    mean = new[:, :1].real / period
     varying = np.fft.irfft(new, period, axis=1) - mean
     peak = np.max(np.abs(varying), axis=1, keepdims=True)
     allowed = np.max(np.abs(references - mean), axis=1, keepdims=True)
