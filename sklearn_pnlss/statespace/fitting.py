@@ -441,8 +441,8 @@ def _sane_on_new_inputs(order, bounded_model, new_inputs, training_periods=(), c
     """``(kept, runaway)``: the kept iterate, the first of ``order``
     (``(iteration, theta, validation error, cost)``, most wanted first)
     whose ``bounded_model(iterate)`` does not run away on any of
-    ``new_inputs`` (normalised, one period each, simulated in turn as one
-    record: see ``runaways_in_turn``) nor on any of
+    ``new_inputs`` (normalised, one period each, dealt to records each
+    simulated in turn: see ``runaways_in_turn``) nor on any of
     ``check_records`` (normalised, simulated from rest), and settles into a
     periodic steady state on each of ``training_periods`` (normalised, one
     period each, repeated from rest as a prediction seeks it), and None
