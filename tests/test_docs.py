@@ -1637,7 +1637,7 @@ FIGURES = [
     Figure(R, "gives the output above 15.5 Hz through three residual layers of 64 linear recurrent units (stable "
               "complex first-order recursions) between 32 channels", LRU,
            lambda: [_lru(0)["model"]["cutoff_hz"], _lru(0)["model"]["n_modes"], _lru(0)["model"]["width"]]),
-    Figure(R, "fitted side by side on the two cores (`AveragedRegressor`: 99 to 112 s with the linear start, each fit "
+    Figure(R, "fitted side by side on the two cores (`AveragedRegressor`: 99 to 105 s with the linear start, each fit "
               "on one core with BLAS on one thread, in single precision above 512 parameters; two single-start fits of "
               "degree 5 take 44 s that way, and 123 s with BLAS threaded in each and in double precision", LRU + "; "
            + SIDE_BY_SIDE,
@@ -1651,9 +1651,9 @@ FIGURES = [
                     _results("lru_iteration")["iteration_of_two_side_by_side_s"],
                     _results("lru_iteration")["product_gflop"], _results("lru_iteration")["products_alone_s"],
                     _results("lru_iteration")["network"]["width"]]),
-    Figure(R, "One such draw takes 274 to 312 s (the networks 175 to 200 s, 300 iterations; the first draw's times "
+    Figure(R, "One such draw takes 297 to 310 s (the networks 192 to 206 s, 300 iterations; the first draw's times "
               "hold the compilation). The four draws reach 0.137, 0.131, 0.128 and 0.126 on the test multisines "
-              "(level 6: 0.109 / 0.103 / 0.214 on the first, 0.107 / 0.097 / 0.212 on the last)", LRU,
+              "(level 6: 0.109 / 0.102 / 0.214 on the first, 0.107 / 0.097 / 0.212 on the last)", LRU,
            lambda: [min(_lru(k)["fit_s"] for k in range(4)), max(_lru(k)["fit_s"] for k in range(4)),
                     min(_lru(k)["network_fit_s"] for k in range(4)), max(_lru(k)["network_fit_s"] for k in range(4)),
                     _lru(0)["model"]["max_iter"], *(_lru(k)["mean_nrmse"] for k in range(4)),
@@ -1662,8 +1662,8 @@ FIGURES = [
            lambda: [min(_lru(k, False)["mean_nrmse"] - _lru(k)["mean_nrmse"] for k in range(4)),
                     max(_lru(k, False)["mean_nrmse"] - _lru(k)["mean_nrmse"] for k in range(4))]),
     Figure(R, "the first two reach 0.128 (level 6: 0.105 / 0.097 / 0.204, every output below the deep LRU's 0.134 / "
-              "0.099 / 0.237), fitted in 592 s (the first draw's compilation included), the next two 0.121 (level 6: "
-              "0.104 / 0.094 / 0.203) in 549 s", LRU,
+              "0.099 / 0.237), fitted in 599 s (the first draw's compilation included), the next two 0.121 (level 6: "
+              "0.104 / 0.094 / 0.203) in 591 s", LRU,
            lambda: [_lru_pair(0)["mean_nrmse"], 6, *_lru_pair(0)["nrmse"]["6"], *_f16_lru_level_6(),
                     _lru_pair(0)["fit_s"], _lru_pair(1)["mean_nrmse"], 6, *_lru_pair(1)["nrmse"]["6"],
                     _lru_pair(1)["fit_s"]]),
@@ -1736,7 +1736,7 @@ FIGURES = [
     Figure(R, "| the mean of two draws, each the mean of two fits of that decoupled model with cubic branches, each "
               "the better of two starts (`AveragedRegressor`, fitted side by side) with two deep networks of linear "
               "recurrent units above the band, averaged (`LRUAboveBandRegressor(n_networks=2)`, "
-              "`benchmarks/f16_lru.py`; 116162 more weights and gate coefficients) | 480 | 0.128 | 592 s |", LRU,
+              "`benchmarks/f16_lru.py`; 116162 more weights and gate coefficients) | 480 | 0.128 | 599 s |", LRU,
            lambda: [2, len(_lru_pair(0)["model"]["draws"]) * _lru(0)["n_above_band_params"],
                     len(_lru_pair(0)["model"]["draws"]) * _lru(0)["model"]["n_estimators"] * _n_decoupled(3, 3, n=18),
                     _lru_pair(0)["mean_nrmse"], _lru_pair(0)["fit_s"]]),
