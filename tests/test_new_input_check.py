@@ -180,3 +180,45 @@ def test_records_simulated_side_by_side_match_one_input_at_a_time(radius):
     assert np.array_equal(model.runaways_in_turn(list(U)), away)
     assert model.runaways_in_turn(list(U), stop_at_first=True).size >= 1
     assert model.runaways_in_turn(list(U[:2])).size == 0  # the quiet ones alone
+
+
+def test_an_iterate_worse_than_its_start_on_a_measured_check_record_is_not_kept():
+    """With the check records' outputs, iterates 10 to 7 simulate both
+    records worse than the start (iterate 0) does: iterate 6 is kept, and
+    the report names the records."""
+    class StandIn:
+        def __init__(self, offset):
+            self.offset = offset
+
+        def runs_away(self, U):
+            return False
+
+        def runaways_in_turn(self, inputs, stop_at_first=False):
+            return []
+
+        def simulate(self, U):
+            return U + self.offset, None
+
+    order = [(k, None, np.nan, 1.0) for k in range(10, -1, -1)]
+    offsets = {k: (0.5 if k >= 7 else 0.1 * (7 - k) / 7) for k in range(11)}  # the start 0.1 off
+    records = [np.zeros((8, 1)), np.ones((8, 1))]
+    outputs = [records[0] + 0.05, records[1] + 0.05]
+    kept, report = _sane_on_new_inputs(order, lambda it: StandIn(offsets[it[0]]), [], (), records, outputs)
+    assert kept[0] == 6
+    assert (report.worse_records, report.runaway_records, report.kept_iteration) == ((0, 1), (), 6)
+    message = report.message("the latest")
+    assert "simulates 2 of the 2 check records (X_check[0], X_check[1]) from rest worse than the fit's start" in message
+    kept, none = _sane_on_new_inputs(order, lambda it: StandIn(offsets[it[0]]), [], (), records)
+    assert kept[0] == 10 and none is None  # without the outputs, no such check
+
+
+def test_check_outputs_must_pair_with_the_check_records():
+    truth = _truth(np.random.default_rng(5))
+    X, y = _data(truth, n_periods=2, n_realizations=2, rms=0.3, seed=2)
+    model = PNLSSRegressor(3, period=N, max_iter=2, random_state=0)
+    with pytest.raises(ValueError, match="y_check was given without X_check"):
+        model.fit(X, y, y_check=y[:1])
+    with pytest.raises(ValueError, match="one output signal per X_check record"):
+        model.fit(X, y, X_check=X, y_check=y[:1])
+    model.fit(X, y, X_check=X[:1], y_check=y[:1])  # the training level's own record: the fit keeps its last iterate
+    assert model.best_iteration_ == model.n_iter_

@@ -53,7 +53,7 @@ class StateSpaceRegressorBase(SignalRegressorBase):
     """
 
     @validates_parameters
-    def fit(self, X, y, *, X_val=None, y_val=None, time_weight=None, X_check=None):
+    def fit(self, X, y, *, X_val=None, y_val=None, time_weight=None, X_check=None, y_check=None):
         """Fit the start model, then the full model by Levenberg-Marquardt.
 
         Parameters
@@ -105,6 +105,14 @@ class StateSpaceRegressorBase(SignalRegressorBase):
             levels' sweeps passed here it keeps an earlier iterate, and its
             draw scores the same on the test multisines
             (``benchmarks/f16_lru.py``).
+        y_check : signals or None, default=None
+            The outputs measured with ``X_check``, when known: the kept
+            iterate must then also simulate each check record from rest no
+            worse (rms error) than the fit's start does. They refuse only,
+            never choose (that would make them validation signals): a
+            model far worse than its start on a measured record has jumped
+            onto another response near a resonance, or drifted, where its
+            range excursion can stay within the runaway bound.
         time_weight : signals or None, default=None
             Non-negative weight of the squared error at each sample, in the
             layout of ``y`` (with n_outputs channels, or one channel for all
@@ -123,7 +131,8 @@ class StateSpaceRegressorBase(SignalRegressorBase):
         # training inputs repeated from rest (periodic inputs only)
         settings = replace(self._fit_settings(), new_inputs=random_phase_inputs(
             X_list, self.period_, random_state=self.random_state),
-            training_periods=training_periods(X_list, self.period_), check_records=self._check_records(X_check))
+            training_periods=training_periods(X_list, self.period_), check_records=self._check_records(X_check),
+            check_outputs=self._check_outputs(y_check, X_check))
         weights = self._check_time_weight(time_weight, y_list)
         if self.weighting == "relative":
             weights = relative_weights(y_list, weights)
@@ -201,6 +210,22 @@ class StateSpaceRegressorBase(SignalRegressorBase):
             raise ValueError(f"X_check has {U_list[0].shape[1]} input channels but X has {self.n_features_in_}; "
                              "give the check records the training inputs' channels.")
         return tuple(U_list)
+
+    def _check_outputs(self, y_check, X_check):
+        """``y_check`` as a tuple of 2-D outputs, one per check record
+        (empty when None)."""
+        if y_check is None:
+            return ()
+        if X_check is None:
+            raise ValueError("y_check was given without X_check: pass the check records' inputs as X_check.")
+        Y_list, _ = as_signal_list(y_check, name="y_check")
+        records = self._check_records(X_check)
+        if len(Y_list) != len(records) or any(Y.shape[0] != U.shape[0] for Y, U in zip(Y_list, records)):
+            raise ValueError("y_check must hold one output signal per X_check record, of the same length; got "
+                             f"{[Y.shape[0] for Y in Y_list]} samples for {[U.shape[0] for U in records]}.")
+        if any(Y.shape[1] != self.n_outputs_ for Y in Y_list):
+            raise ValueError(f"y_check has {Y_list[0].shape[1]} output channels but y has {self.n_outputs_}.")
+        return tuple(Y_list)
 
     def _check_validation(self, X_val, y_val):
         if (X_val is None) != (y_val is None):

@@ -75,7 +75,9 @@ class FitSettings:
     rest, the kept iterate must settle into a periodic steady state on.
     ``check_records``: the user's inputs (user units, any length) of other
     kinds at the training levels, each simulated from rest, that the kept
-    iterate must not run away on either.
+    iterate must not run away on either. ``check_outputs``: the outputs
+    measured with them (user units), or empty: the kept iterate must then
+    also simulate each record from rest no worse than the fit's start does.
     """
 
     period: int | None = None
@@ -93,6 +95,7 @@ class FitSettings:
     new_inputs: tuple = field(default=(), compare=False, repr=False)
     training_periods: tuple = field(default=(), compare=False, repr=False)
     check_records: tuple = field(default=(), compare=False, repr=False)
+    check_outputs: tuple = field(default=(), compare=False, repr=False)
 
     def period_of(self, U):
         """``period`` when ``U`` is a periodic steady-state signal, else None."""
@@ -128,6 +131,7 @@ class NewInputRunaway:
     n_training: int = 0
     runaway_records: tuple = ()  # the check records (places in X_check) it ran away on, for the warning to name
     n_records: int = 0
+    worse_records: tuple = ()  # the check records it simulated worse than the fit's start (with y_check)
 
     def message(self, ranking):
         """The warning an estimator gives; ``ranking``: how the iterates
@@ -143,6 +147,11 @@ class NewInputRunaway:
             named = ", ".join(f"X_check[{i}]" for i in self.runaway_records)
             faults.append(f"runs away on {len(self.runaway_records)} of the {self.n_records} check records ({named}) "
                           "simulated from rest")
+        if self.worse_records:
+            named = ", ".join(f"X_check[{i}]" for i in self.worse_records)
+            faults.append(f"simulates {len(self.worse_records)} of the {self.n_records} check records ({named}) from "
+                          "rest worse than the fit's start (their y_check), a jump to another response or a "
+                          "drift the fit's signals did not show")
         if self.n_unsettled:
             faults.append(f"does not settle into a periodic response on {self.n_unsettled} of its {self.n_training} "
                           f"periodic training inputs repeated from rest (within {MAX_STEADY_PERIODS} periods: it "
@@ -425,7 +434,8 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
         return [start.normalise_inputs(U) for U in signals]
 
     kept, runaway = _sane_on_new_inputs(order, bounded_model, normalised(settings.new_inputs),
-                                        normalised(settings.training_periods), normalised(settings.check_records))
+                                        normalised(settings.training_periods), normalised(settings.check_records),
+                                        [start.normalise_outputs(Y) for Y in settings.check_outputs])
     return LMFit(
         model=start.with_normalised(bounded_model(kept)),
         n_iter=done, best_iteration=kept[0],
@@ -437,7 +447,7 @@ def optimise(start, objectives, settings, validation=None, max_iter=None):
     )
 
 
-def _sane_on_new_inputs(order, bounded_model, new_inputs, training_periods=(), check_records=()):
+def _sane_on_new_inputs(order, bounded_model, new_inputs, training_periods=(), check_records=(), check_outputs=()):
     """``(kept, runaway)``: the kept iterate, the first of ``order``
     (``(iteration, theta, validation error, cost)``, most wanted first)
     whose ``bounded_model(iterate)`` does not run away on any of
@@ -445,9 +455,19 @@ def _sane_on_new_inputs(order, bounded_model, new_inputs, training_periods=(), c
     simulated in turn: see ``runaways_in_turn``) nor on any of
     ``check_records`` (normalised, simulated from rest), and settles into a
     periodic steady state on each of ``training_periods`` (normalised, one
-    period each, repeated from rest as a prediction seeks it), and None
-    when that is the first, else :class:`NewInputRunaway`. The first is
-    kept when there are no such inputs or no iterate passes.
+    period each, repeated from rest as a prediction seeks it), and, with
+    ``check_outputs`` (normalised, one per check record), simulates each
+    check record from rest no worse (rms error) than the earliest iterate
+    of ``order``, the fit's start, does; and None when that is the first,
+    else :class:`NewInputRunaway`. The first is kept when there are no
+    such inputs or no iterate passes.
+
+    The outputs only refuse: an iterate far worse than its start on a
+    measured record has jumped to another response or drifted where the
+    fit's signals never went (F-16 members on the sine sweeps of the
+    estimation levels, missed by several times the output's rms, inside
+    the runaway bound), where choosing the best on them would make them
+    validation signals.
 
     The training cost scores each period after a transient of at most a
     period, so a response that drifts away from the fitted orbit by a few
@@ -463,6 +483,9 @@ def _sane_on_new_inputs(order, bounded_model, new_inputs, training_periods=(), c
     every input."""
     # each fault the report holds: its field there, the inputs, the places in them a model fails on
     # (for a verdict, as far as the first: the rest need not be simulated)
+    record_error = partial(_rms_record_error, records=check_records, outputs=check_outputs)
+    start_errors = [record_error(bounded_model(min(order, key=lambda it: it[0])), i)
+                    for i in range(len(check_outputs))]
     checks = (
         ("n_runaway", new_inputs,
          lambda model, inputs, verdict: model.runaways_in_turn(inputs, stop_at_first=verdict)),
@@ -470,6 +493,8 @@ def _sane_on_new_inputs(order, bounded_model, new_inputs, training_periods=(), c
          lambda model, inputs, verdict: (i for i, U in enumerate(inputs) if model.runs_away(U))),
         ("n_unsettled", training_periods,
          lambda model, inputs, verdict: (i for i, U in enumerate(inputs) if not model.settles(U))),
+        ("worse_records", check_outputs,
+         lambda model, outputs, verdict: (i for i, e in enumerate(start_errors) if record_error(model, i) > e)),
     )
     if not any(inputs for _, inputs, _ in checks):
         return order[0], None
@@ -479,6 +504,7 @@ def _sane_on_new_inputs(order, bounded_model, new_inputs, training_periods=(), c
         return order[0], None
     report = partial(NewInputRunaway, order[0][0], n_inputs=len(new_inputs), n_training=len(training_periods),
                      n_records=len(check_records), runaway_records=tuple(failing["runaway_records"]),
+                     worse_records=tuple(failing["worse_records"]),
                      n_runaway=len(failing["n_runaway"]), n_unsettled=len(failing["n_unsettled"]))
     verdicts = {}
 
@@ -499,3 +525,12 @@ def _sane_on_new_inputs(order, bounded_model, new_inputs, training_periods=(), c
         middle = (failed + probe) // 2
         failed, probe = (failed, middle) if passes(middle) else (middle, probe)
     return order[probe], report(kept_iteration=order[probe][0])
+
+
+def _rms_record_error(model, i, records, outputs):
+    """The rms error of ``model`` simulated from rest on ``records[i]``
+    against ``outputs[i]`` (inf when it diverges)."""
+    try:
+        return float(np.sqrt(np.mean((model.simulate(records[i])[0] - outputs[i]) ** 2)))
+    except DivergenceError:
+        return np.inf
