@@ -59,8 +59,9 @@ def draw_rows(name, settings, model, start, start_s, X, y, train_sweeps, test, s
     from sklearn_pnlss import LRUAboveBandRegressor
 
     t0 = time.perf_counter()
-    # the estimation levels' sweeps as check records: a member that runs away on one is not returned
-    model.fit(start.transform(X), y, X_check=[d.X[0] for d in train_sweeps])
+    # the estimation levels' sweeps as check records: a member that runs away on one, or simulates one worse
+    # than its start (a jump onto another response near a resonance), is not returned
+    model.fit(start.transform(X), y, X_check=[d.X[0] for d in train_sweeps], y_check=[d.y[0] for d in train_sweeps])
     model_s = time.perf_counter() - t0
     rows = [bench_f16.entry(name, settings, model, test, start_s + model_s)]
     t0 = time.perf_counter()

@@ -2,7 +2,8 @@
 members of ``f16_lru.py``'s draws, on more seeds than its four draws
 (issue 35).
 
-    python benchmarks/f16_member_spread.py [--seeds 16] [--member KEY=VALUE ...] [--data-dir DIR] [--output FILE]
+    python benchmarks/f16_member_spread.py [--seeds 16] [--member KEY=VALUE ...] [--no-check-outputs]
+        [--data-dir DIR] [--output FILE]
 
 ``f16_lru.py`` scores the model of the protocol, the mean of two draws of
 two members each with networks above the band, on draws 0-1 and 2-3 only:
@@ -12,7 +13,8 @@ dear; its members (about 90 s a pair) do not. This script fits
 ``--seeds`` members exactly as ``f16_lru.py``'s draws do (draw ``k``'s
 members seeded ``2k`` and ``2k + 1``, two side by side,
 ``DecoupledPNLSSRegressor(18, 3, 3, signed_powers)``, each the better of
-two random starts, the estimation levels' sweeps as check records), and
+two random starts, the estimation levels' sweeps as check records with
+their outputs), and
 scores each member (with the iterate its fit kept and why), each
 consecutive pair of draws' model of the band (four members, as
 ``f16_lru.py``'s pairs have), and every set of four members of all those
@@ -20,9 +22,11 @@ fitted: the spread of the model of the band that the networks above it
 leave as it is. Each is scored twice: on the test multisines (periodic
 steady state), and, so that no choice of member settings need rest on
 the test levels alone, on the estimation levels' sweeps simulated from
-rest, inside the excited band (which the fits only check for runaways;
-each member's excursion past its trusted range on them is recorded
-too). Writes ``results/f16_member_spread.json``. ``--member``
+rest, inside the excited band (which the fits use only to refuse an
+iterate that runs away on one or simulates one worse than its start, never
+to choose; each member's excursion past its trusted range on them is
+recorded too). ``--no-check-outputs`` leaves their outputs out, as the
+runs before the refusal had them. Writes ``results/f16_member_spread.json``. ``--member``
 changes a member setting to measure a variant on the same seeds
 (``--member degree=5 --member n_init=1 --output /tmp/variant.json``: the
 members of the earlier runs, ``bench_f16.py``'s model from one start).
@@ -47,7 +51,7 @@ from f16_clearances import load_and_start  # noqa: E402
 PAIR_MEMBERS = 4
 
 
-def fit_draw(draw, Xs, y, check_records, member_settings):
+def fit_draw(draw, Xs, y, check_records, check_outputs, member_settings):
     """Draw ``draw``'s two members, fitted side by side as f16_lru.py's
     draws fit them but for ``member_settings``, with the fits' warnings
     about the kept iterate."""
@@ -55,7 +59,7 @@ def fit_draw(draw, Xs, y, check_records, member_settings):
     t0 = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        averaged.fit(Xs, y, X_check=check_records)
+        averaged.fit(Xs, y, X_check=check_records, y_check=check_outputs)
     fit_s = time.perf_counter() - t0
     kept = [str(w.message) for w in caught if "is kept instead" in str(w.message)]
     return averaged.estimators_, fit_s, kept
@@ -107,6 +111,8 @@ def main(argv=None):
     parser.add_argument("--seeds", type=int, default=16, help="members fitted (an even number: two per draw)")
     parser.add_argument("--member", action="append", default=[], metavar="KEY=VALUE",
                         help="a member setting other than f16_lru.py's (degree=5, n_init=1, stable_at_rest=True)")
+    parser.add_argument("--check-outputs", action=argparse.BooleanOptionalAction, default=True,
+                        help="give the fits the estimation sweeps' outputs (y_check), as f16_lru.py does")
     parser.add_argument("--output", default=RESULTS / "f16_member_spread.json")
     args = parser.parse_args(argv)
     if args.seeds < PAIR_MEMBERS or args.seeds % 2:
@@ -117,15 +123,17 @@ def main(argv=None):
 
     X, y, test, train_sweeps, start, start_s = load_and_start(args.data_dir)
     Xs, check_records = start.transform(X), [d.X[0] for d in train_sweeps]
+    check_outputs = [d.y[0] for d in train_sweeps] if args.check_outputs else None
     # the estimation levels' sweeps, scored so that no choice of member settings need rest on the test levels alone
     sweeps = dict(zip(bench_f16.TRAIN_LEVELS, train_sweeps))
     results = {**header(), "protocol": {"train_levels": bench_f16.TRAIN_LEVELS, "test_levels": bench_f16.TEST_LEVELS},
                "model": {**f16_lru.decoupled(f16_lru.MEMBER_DEGREE)[1], "n_init": f16_lru.MEMBER_STARTS,
-                         "check_records": "the estimation levels' sine sweeps", **member_settings},
+                         "check_records": "the estimation levels' sine sweeps",
+                         "check_outputs": args.check_outputs, **member_settings},
                "start_s": start_s, "draws": [], "members": []}
     predictions, sweep_errors = {}, {}
     for draw in range(args.seeds // 2):
-        members, fit_s, kept = fit_draw(draw, Xs, y, check_records, member_settings)
+        members, fit_s, kept = fit_draw(draw, Xs, y, check_records, check_outputs, member_settings)
         for member in members:
             seed = int(member.random_state)
             predictions[seed] = {lv: member.predict(d.X)[0] for lv, d in test.items()}
