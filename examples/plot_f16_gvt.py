@@ -269,18 +269,19 @@ if train is not None:
 #   units above the band (``LRUAboveBandRegressor``, the force there gated
 #   by the state, its loss the mean NRMSE, two networks averaged) on the
 #   mean of two fits of the 18-state model with cubic branches, each the
-#   better of two starts, reaches 0.137, 0.131, 0.128 and 0.126 on four
-#   draws; the mean of two such draws reaches 0.128 and 0.121 on the two
-#   pairs, in under ten minutes, level 6 below the deep LRU's figures on
-#   both. The model of the band spreads over random starts, so a pair of
-#   draws at the median lands near 0.130
-#   (``benchmarks/f16_member_spread.py``). The sweeps still fail now and
-#   then: a member may jump, near a resonance, onto a response several
-#   times the measured one, bounded and inside the check against runaways
-#   (the pairs score 0.197 and 0.320 on the test sweeps). A fit keeps the
-#   latest iterate whose response to each training level settles and that
-#   runs away on none of the estimation levels' sweeps (``X_check``)
-#   (``benchmarks/f16_lru.py``).
+#   better of two starts, reaches 0.137, 0.131, 0.128 and 0.132 on four
+#   draws; the mean of two such draws reaches 0.128 and 0.126 on the two
+#   pairs, level 6 below the deep LRU's figures on both, in about ten
+#   minutes (605 and 597 s: the budget has no margin). The model of the
+#   band spreads over random starts, so a pair of draws at the median
+#   lands near 0.131 (``benchmarks/f16_member_spread.py``). Near a
+#   resonance a member may jump onto a response several times the
+#   measured one on a sweep, bounded and inside the check against
+#   runaways; the fits are given the estimation levels' sweeps with their
+#   outputs (``X_check``, ``y_check``), which refuse an iterate that runs
+#   away on one or simulates one worse than its start. The sweeps are
+#   still the weaker waveform: the pairs score 0.197 and 0.223 on the test
+#   sweeps (``benchmarks/f16_lru.py``).
 # - **Amplitudes between the fitted ones.** Every level drives the same
 #   multisine at another amplitude, so the test levels ask how the response
 #   changes between fitted amplitudes, and in the band the models miss the
