@@ -8,7 +8,9 @@ The model of the band is a decoupled model
 (``DecoupledPNLSSRegressor(18, n_branches=3, degree=3,
 branch_basis="signed_powers", init="random")`` from the BLA of 18 states,
 fitted on the multisines of levels 1, 3, 5 and 7, with their sine
-sweeps as check records, ``X_check``), in two forms: for
+sweeps as check records, ``X_check``, and those sweeps' outputs,
+``y_check``, which refuse an iterate that simulates one worse than its
+start), in two forms: for
 each of ``--draws`` the mean of two fits, each the better of two random
 starts (``AveragedRegressor``, side by side on the two cores; draw
 ``k``'s members are seeded ``2k`` and ``2k + 1``), and for each of
@@ -83,12 +85,13 @@ def draw_rows(name, settings, model, start, start_s, X, y, train_sweeps, test, s
 
 # networks averaged above the band, fitted side by side (one on each core)
 N_NETWORKS = 2
-# single-start fits averaged in a draw's model of the band, side by side (four, two on each core, did no
-# better: the more members, the likelier one unstable at rest, whose periodic steady state at the lowest test
-# level then fails)
+# fits averaged in a draw's model of the band, side by side (with the single-start fifth-degree members, four,
+# two on each core, did no better: the more members, the likelier one unstable at rest, whose periodic steady
+# state at the lowest test level then fails)
 N_MEMBERS = 2
 # A member's branches are cubic, each member the better of two random starts: over f16_member_spread.py's 16
-# seeds, every set of four such members scored 0.161-0.183 (median 0.173) on the test multisines against
+# seeds, fitted without the sweeps' outputs (results/f16_member_spread_no_outputs.json), every set of four such
+# members scored 0.161-0.183 (median 0.173) on the test multisines against
 # 0.166-0.190 (median 0.177) for single-start fifth-degree members (bench_f16.py's), half of which kept an earlier
 # iterate because the last ran away; cubic members from one start were no better (one of 16 stalled at 0.37). On
 # the estimation levels' sweeps the cubic members are not better (median 0.200 against 0.186 in the band).

@@ -14,9 +14,8 @@ dear; its members (about 90 s a pair) do not. This script fits
 members seeded ``2k`` and ``2k + 1``, two side by side,
 ``DecoupledPNLSSRegressor(18, 3, 3, signed_powers)``, each the better of
 two random starts, the estimation levels' sweeps as check records with
-their outputs), and
-scores each member (with the iterate its fit kept and why), each
-consecutive pair of draws' model of the band (four members, as
+their outputs), and scores each member (with the iterate its fit kept and
+why), each consecutive pair of draws' model of the band (four members, as
 ``f16_lru.py``'s pairs have), and every set of four members of all those
 fitted: the spread of the model of the band that the networks above it
 leave as it is. Each is scored twice: on the test multisines (periodic
@@ -26,8 +25,8 @@ rest, inside the excited band (which the fits use only to refuse an
 iterate that runs away on one or simulates one worse than its start, never
 to choose; each member's excursion past its trusted range on them is
 recorded too). ``--no-check-outputs`` leaves their outputs out, as the
-runs before the refusal had them. Writes ``results/f16_member_spread.json``. ``--member``
-changes a member setting to measure a variant on the same seeds
+runs before the refusal had them. Writes ``results/f16_member_spread.json``.
+``--member`` changes a member setting to measure a variant on the same seeds
 (``--member degree=5 --member n_init=1 --output /tmp/variant.json``: the
 members of the earlier runs, ``bench_f16.py``'s model from one start).
 """

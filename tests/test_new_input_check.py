@@ -166,14 +166,15 @@ def test_records_simulated_side_by_side_match_one_input_at_a_time(radius):
     with the arithmetic of one input at a time: the same excursions, inf
     where the state diverges (radius 1.05: unstable once its cubic is
     held at the edge of its trusted range)."""
-    from sklearn_pnlss.statespace.model_base import StateSpaceModel
+    from sklearn_pnlss.statespace.model_base import CHECK_RECORDS, StateSpaceModel
 
     model = replace(_oscillator(radius), bounds=np.array([[-0.6, 0.6], [-0.5, 0.7], [-np.inf, np.inf]]))
     rng = np.random.default_rng(4)
     U = np.stack([a * rng.standard_normal((400, 1)) for a in np.linspace(0.2, 6.0, 13)])
     side_by_side, one_at_a_time = np.full(13, np.nan), np.full(13, np.nan)
-    model._excursions_in_turn(U, 4, 0, 4, 1.0, False, side_by_side)
-    StateSpaceModel._excursions_in_turn(model, U, 4, 0, 4, 1.0, False, one_at_a_time)
+    # as runaways_in_turn deals them: 13 inputs to 8 records, 5 of them of two
+    model._excursions_in_turn(U, CHECK_RECORDS, 0, CHECK_RECORDS, 1.0, False, side_by_side)
+    StateSpaceModel._excursions_in_turn(model, U, CHECK_RECORDS, 0, CHECK_RECORDS, 1.0, False, one_at_a_time)
     assert np.array_equal(side_by_side, one_at_a_time)
     away = np.flatnonzero(one_at_a_time > 1.0)
     assert 0 < away.size < 13 and (radius < 1 or np.isinf(one_at_a_time).any())

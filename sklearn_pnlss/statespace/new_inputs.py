@@ -64,8 +64,9 @@ def random_phase_inputs(X_list, period, n_inputs=N_NEW_INPUTS, random_state=None
     # the k-th realisation from the (k mod P)-th of the P training periods,
     # all drawn at once: the same phases, in the same order, as one at a time
     of_period = np.arange(n_inputs) % len(periods)
-    references = np.stack(periods)[of_period]
-    spectra = np.fft.rfft(np.stack(periods), axis=1)
+    stacked = np.stack(periods)
+    references = stacked[of_period]
+    spectra = np.fft.rfft(stacked, axis=1)
     new = np.abs(spectra)[of_period] * _unit_phasors(rng.random_sample((n_inputs, *spectra.shape[1:])))
     new[:, 0] = spectra[of_period, 0]
     if period % 2 == 0:
