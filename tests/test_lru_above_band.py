@@ -9,7 +9,7 @@ from scipy.signal import lfilter
 from sklearn.base import clone
 
 from sklearn_pnlss import AveragedRegressor, BLAEstimator, DecoupledPNLSSRegressor, LRUAboveBandRegressor
-from sklearn_pnlss.estimators._lru import LRUNetwork, batch_loss, one_cycle
+from sklearn_pnlss.estimators._lru import LRUNetwork, Workspace, batch_loss, one_cycle
 from sklearn_pnlss.metrics import nrmse_by_band
 
 
@@ -155,6 +155,24 @@ def test_a_batch_is_its_sequences_one_by_one():
             summed = {k: summed.get(k, 0) + v for k, v in g.items()}
         for k in together:
             np.testing.assert_allclose(together[k], summed[k], atol=1e-10)
+
+
+@pytest.mark.parametrize("single", [False, True])
+def test_a_workspace_changes_no_bit(single):
+    """Forward and backward through a workspace kept over iterations and
+    batches of two shapes give the same outputs and gradients, bit for
+    bit, as through new arrays (a fit's losses are reproducible whatever
+    the workspace held before)."""
+    rng = np.random.default_rng(6)
+    net = LRUNetwork(3, 2, width=4, n_layers=2, n_modes=5, rng=rng, single=single)
+    work = Workspace()
+    for periodic, x in [(True, rng.standard_normal((2, 30, 3))), (False, rng.standard_normal((3, 50, 3)))] * 2:
+        kept = net.forward(x, periodic, keep=True, work=work)
+        grads = net.backward(kept, work)
+        new = net.forward(x, periodic, keep=True)
+        assert np.array_equal(kept, new)
+        for name, g in net.backward(new).items():
+            assert np.array_equal(grads[name], g), name
 
 
 @pytest.mark.parametrize("with_floor", [False, True])

@@ -26,7 +26,7 @@ from numba import njit, prange
 
 from ..utils.threads import one_blas_thread
 
-__all__ = ["LRUNetwork", "batch_loss", "fit_network", "fit_networks", "one_cycle"]
+__all__ = ["LRUNetwork", "Workspace", "batch_loss", "fit_network", "fit_networks", "one_cycle"]
 
 
 @njit(parallel=True, cache=True, fastmath=True)
@@ -80,13 +80,12 @@ _HALF, _ONE, _INV_SQRT_2PI = np.float32(0.5), np.float32(1.0), np.float32(1.0 / 
 
 
 @njit(parallel=True, cache=True, fastmath=True)
-def _gelu(x):
+def _gelu(x, out, slope):
     """GELU ``x Phi(x)`` of each element of ``x`` (n_rows, n_columns) and
-    its derivative ``Phi(x) + x phi(x)``. ``Phi`` by Abramowitz and
-    Stegun's 7.1.26 (absolute error below 1.5e-7, under float32's
-    resolution), whose one exponential is also ``phi``'s: half the cost of
-    ``erf`` and ``exp`` apart."""
-    out, slope = np.empty_like(x), np.empty_like(x)
+    its derivative ``Phi(x) + x phi(x)``, written to ``out`` and ``slope``.
+    ``Phi`` by Abramowitz and Stegun's 7.1.26 (absolute error below 1.5e-7,
+    under float32's resolution), whose one exponential is also ``phi``'s:
+    half the cost of ``erf`` and ``exp`` apart."""
     p0, p1, p2, p3, p4 = _P
     for i in prange(x.shape[0]):
         for j in range(x.shape[1]):
@@ -101,12 +100,12 @@ def _gelu(x):
 
 
 @njit(parallel=True, cache=True, fastmath=True)
-def _layer_norm(h, gain, bias):
+def _layer_norm(h, gain, bias, out, normed, inv_std):
     """Each row of ``h`` (n_rows, width) normalised to zero mean and unit
     variance (``normed``), then scaled and shifted (``gain``, ``bias``):
-    returns that, ``normed`` and each row's inverse standard deviation."""
+    writes that to ``out``, and ``normed`` and each row's inverse standard
+    deviation (``inv_std``)."""
     n_rows, width = h.shape
-    out, normed, inv_std = np.empty_like(h), np.empty_like(h), np.empty(n_rows, dtype=h.dtype)
     for i in prange(n_rows):
         mean = 0.0
         for j in range(width):
@@ -211,7 +210,7 @@ class LRUNetwork:
         return np.exp(-np.exp(p[f"nu{k}"]) + 1j * np.exp(p[f"theta{k}"]))
 
     # --- one recursion layer -------------------------------------------------
-    def _recursion(self, k, v, n_seq, periodic):
+    def _recursion(self, k, v, n_seq, periodic, work):
         """``Re(C s) + D v`` of the recursions ``s(t) = lam s(t - 1) + B
         v(t)`` of layer ``k`` driven by ``v`` (n_seq * n_samples, width),
         from rest or in periodic steady state; and what the backward pass
@@ -224,24 +223,29 @@ class LRUNetwork:
         B_parts = np.vstack([B.real, B.imag]).astype(self.real)  # (2 n_modes, width)
         # Re(C s) = C_re s_re - C_im s_im
         C_parts = np.vstack([p[f"C{k}"].real.T, -p[f"C{k}"].imag.T]).astype(self.real)  # (2 n_modes, width)
-        s = _recurse(v @ B_parts.T, lam, n_seq, periodic, False)
-        out = s @ C_parts + p[f"D{k}"].astype(self.real) * v
+        n_rows = v.shape[0]
+        s = _recurse(np.matmul(v, B_parts.T, out=work.get(f"s{k}", (n_rows, B_parts.shape[0]), self.real)),
+                     lam, n_seq, periodic, False)
+        out = np.matmul(s, C_parts, out=work.get("r", v.shape, self.real))
+        out += np.multiply(p[f"D{k}"].astype(self.real), v, out=work.get("product", v.shape, self.real))
         return out, (v, lam, gamma, B_parts, C_parts, s, n_seq, periodic)
 
-    def _recursion_backward(self, k, g_out, cache, grads):
+    def _recursion_backward(self, k, g_out, cache, grads, work):
         v, lam, gamma, B_parts, C_parts, s, n_seq, periodic = cache
         n_modes = lam.size
         p = self.params
-        grads[f"D{k}"] = np.sum(g_out * v, axis=0, dtype=np.float64)
-        g_v = g_out * p[f"D{k}"].astype(self.real)
+        product = work.get("product", v.shape, self.real)
+        grads[f"D{k}"] = np.sum(np.multiply(g_out, v, out=product), axis=0, dtype=np.float64)
+        g_v = np.multiply(g_out, p[f"D{k}"].astype(self.real), out=work.get("g_v", v.shape, self.real))
         # Re(C s): dL/dC = g conj(s), dL/ds = conj(C)^T g (gradients as dRe + i dIm)
         G_C = (g_out.T @ s).astype(np.float64)
         grads[f"C{k}"] = G_C[:, :n_modes] - 1j * G_C[:, n_modes:]
-        G = _recurse(g_out @ C_parts.T, lam, n_seq, periodic, True)  # through the recursion
+        G = _recurse(np.matmul(g_out, C_parts.T, out=work.get("G", s.shape, self.real)), lam, n_seq, periodic,
+                     True)  # through the recursion
         G_lam = _pole_gradient(s, G, n_seq, periodic)
         G_B = (G.T @ v).astype(np.float64)
         G_B = G_B[:n_modes] + 1j * G_B[n_modes:]
-        g_v += G @ B_parts
+        g_v += np.matmul(G, B_parts, out=product)
         grads[f"B{k}"] = G_B * gamma[:, None]
         g_gamma = np.real(np.sum(np.conj(G_B) * p[f"B{k}"], axis=1))
         # lam = exp(z), z = -exp(nu) + i exp(theta); gamma = sqrt(1 - exp(-2 exp(nu)))
@@ -252,21 +256,30 @@ class LRUNetwork:
         return g_v
 
     # --- the network -----------------------------------------------------------
-    def forward(self, x, periodic, keep=False):
+    def forward(self, x, periodic, keep=False, work=None):
         """The network's output (n_samples, n_outputs) for ``x`` (n_samples,
         n_inputs), or for a batch (n_sequences, n_samples, n_inputs): from
-        rest, or in periodic steady state over each sequence (one period)."""
+        rest, or in periodic steady state over each sequence (one period).
+        ``work``: a :class:`Workspace` whose arrays the intermediate
+        signals are written to (a fit passes the same one at every
+        iteration), or None for new arrays."""
+        work = _NEW_ARRAYS if work is None else work
         p = {k: v.astype(self.real) for k, v in self.params.items() if not np.iscomplexobj(v)}
         shape = x.shape
         n_seq = 1 if x.ndim == 2 else shape[0]
         x = x.reshape(-1, shape[-1]).astype(self.real)
+        n_rows, width = x.shape[0], p["enc_b"].size
         caches = []
-        h = x @ p["enc_W"].T + p["enc_b"]
+        h = np.matmul(x, p["enc_W"].T, out=work.get("h", (n_rows, width), self.real))
+        h += p["enc_b"]
         for k in range(self.n_layers):
-            v, normed, inv_std = _layer_norm(h, p[f"ln_g{k}"], p[f"ln_b{k}"])
-            r, rec_cache = self._recursion(k, v, n_seq, periodic)
-            a, da = _gelu(r)
-            h = h + a @ p[f"mix_W{k}"].T + p[f"mix_b{k}"]
+            # what the backward pass reads is written to arrays of this layer's own
+            v, normed, inv_std = _layer_norm(h, p[f"ln_g{k}"], p[f"ln_b{k}"], *work.get_many(
+                (f"v{k}", h.shape), (f"normed{k}", h.shape), (f"inv_std{k}", (n_rows,)), dtype=self.real))
+            r, rec_cache = self._recursion(k, v, n_seq, periodic, work)
+            a, da = _gelu(r, *work.get_many((f"a{k}", r.shape), (f"da{k}", r.shape), dtype=self.real))
+            h += np.matmul(a, p[f"mix_W{k}"].T, out=work.get("product", h.shape, self.real))
+            h += p[f"mix_b{k}"]
             if keep:
                 caches.append((normed, inv_std, rec_cache, a, da))
         if keep:
@@ -274,24 +287,57 @@ class LRUNetwork:
         out = h @ p["dec_W"].T + p["dec_b"]
         return out.reshape(*shape[:-1], out.shape[-1])
 
-    def backward(self, g_out):
+    def backward(self, g_out, work=None):
         """The gradients of a loss whose gradient with respect to the last
-        :meth:`forward` (with ``keep=True``)'s output is ``g_out``."""
+        :meth:`forward` (with ``keep=True``)'s output is ``g_out``
+        (``work``: the workspace that forward was given)."""
+        work = _NEW_ARRAYS if work is None else work
         x, h, caches, p, shape = self._cache
         grads = {}
         g_out = g_out.reshape(-1, g_out.shape[-1]).astype(self.real)
         grads["dec_W"], grads["dec_b"] = g_out.T @ h, g_out.sum(axis=0)
-        g_h = g_out @ p["dec_W"]
+        g_h = np.matmul(g_out, p["dec_W"], out=work.get("g_h", h.shape, self.real))
         for k in reversed(range(self.n_layers)):
             normed, inv_std, rec_cache, a, da = caches[k]
             grads[f"mix_W{k}"], grads[f"mix_b{k}"] = g_h.T @ a, g_h.sum(axis=0)
-            g_r = (g_h @ p[f"mix_W{k}"]) * da
-            g_v = self._recursion_backward(k, g_r, rec_cache, grads)
+            g_r = np.matmul(g_h, p[f"mix_W{k}"], out=work.get("g_r", h.shape, self.real))
+            g_r *= da
+            g_v = self._recursion_backward(k, g_r, rec_cache, grads, work)
             grads[f"ln_g{k}"], grads[f"ln_b{k}"] = np.einsum("ij,ij->j", g_v, normed), g_v.sum(axis=0)
             g_h = _layer_norm_backward(g_v, normed, inv_std, p[f"ln_g{k}"], g_h)
         grads["enc_W"], grads["enc_b"] = g_h.T @ x, g_h.sum(axis=0)
         self._cache = None
         return {k: np.asarray(g, dtype=self.params[k].dtype) for k, g in grads.items()}
+
+
+class Workspace:
+    """The arrays of a network's intermediate signals, kept from one
+    iteration to the next by name and shape. Each new array costs the
+    operating system's zeroing of its pages when first written: on the
+    F-16's batch (98,304 rows) a fifth of an iteration, spent again at every
+    iteration when the arrays are new ones."""
+
+    def __init__(self):
+        self._arrays = {}
+
+    def get(self, name, shape, dtype):
+        key = (name, tuple(shape), np.dtype(dtype))
+        if key not in self._arrays:
+            self._arrays[key] = np.empty(shape, dtype)
+        return self._arrays[key]
+
+    def get_many(self, *named_shapes, dtype):
+        return [self.get(name, shape, dtype) for name, shape in named_shapes]
+
+
+class _NewArrays(Workspace):
+    """A workspace that gives a new array at every call."""
+
+    def get(self, name, shape, dtype):
+        return np.empty(shape, dtype)
+
+
+_NEW_ARRAYS = _NewArrays()
 
 
 class _Adam:
@@ -376,6 +422,7 @@ def fit_network(network, signals, n_iter, learning_rate, segment_length, burn_in
     network's output before the error (what of it the model keeps), or
     None. Returns the loss at each iteration."""
     adam = _Adam(network.params)
+    work = Workspace()
     losses = []
     with_floor = signals[0][4] is not None
     n_terms = len(signals) * signals[0][1].shape[1]
@@ -395,7 +442,7 @@ def fit_network(network, signals, n_iter, learning_rate, segment_length, burn_in
         total, grads = 0.0, None
         for (periodic, _), pieces in batches.items():
             inputs, target, weights, floor = (np.stack(part) for part in zip(*pieces))
-            out = network.forward(inputs, periodic, keep=True)
+            out = network.forward(inputs, periodic, keep=True, work=work)
             if project is not None:
                 out = np.stack([project(o, periodic) for o in out])
             loss, g = batch_loss(out - target, weights, floor if with_floor else None)
@@ -403,7 +450,7 @@ def fit_network(network, signals, n_iter, learning_rate, segment_length, burn_in
             g /= n_terms
             if project is not None:
                 g = np.stack([project(piece, periodic) for piece in g])
-            g = network.backward(g)
+            g = network.backward(g, work)
             grads = g if grads is None else {k: grads[k] + g[k] for k in g}
         norm = np.sqrt(sum(float(np.sum(_real(g) ** 2)) for g in grads.values()))
         if norm > clip:
