@@ -471,7 +471,7 @@ def fit_networks(settings, signals, training, seeds, project, n_jobs=None):
     if n_workers == 1:
         # here, every core for the compiled kernels, BLAS on one: its products are too small to share
         # out, and its threads spinning between them take the kernels' cores (0.48 s an iteration on
-        # the F-16 on 2 cores, 0.69 s with BLAS on both)
+        # the F-16 on 2 cores, 0.69 s with BLAS on both, measured before the workspace)
         with one_blas_thread():
             return [_fit_one(settings, signals, training, pair, project) for pair in seeds]
     threads = max(1, cpu_count() // n_workers)

@@ -118,8 +118,8 @@ class LRUAboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
         each in its own process with its share of the cores (joblib's
         convention: None one, -1 as many as there are cores). One network's
         products are too narrow to keep two cores busy: on the F-16 an
-        iteration of one takes 0.52 s on two cores, of two side by side
-        0.61 s.
+        iteration of one takes 0.40 s on two cores, of two side by side
+        0.52 s.
     random_state : int, RandomState instance or None, default=None
         The networks' initial weights and the segments drawn (the k-th
         network's two seeds are the generator's draws ``2 k`` and ``2 k +
@@ -166,16 +166,19 @@ class LRUAboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
     On the F-16 ground vibration test (``benchmarks/f16_lru.py``), fitted
     on the estimation levels' multisines and sine sweeps on top of the
     benchmark's decoupled model of 18 states, two networks
-    (``n_networks=2, n_jobs=2``) take the mean test NRMSE of one fit from
-    0.173 to 0.130, and of the mean of two single-start fits (an
-    :class:`AveragedRegressor`) from 0.168 to 0.125, fitted in about 185 s
-    on 2 cores (the README's F-16 section has the figures). An iteration
+    (``n_networks=2, n_jobs=2``) take the mean test NRMSE of the mean of
+    two fits, each the better of two random starts (an
+    :class:`AveragedRegressor`), from 0.170 - 0.180 to 0.128 - 0.137 over
+    four draws, fitted in 164 to 170 s on 2 cores (the README's F-16
+    section has the figures). An iteration
     passes each periodic signal's period and one segment of each other
     signal forward and back: about ``24 n_layers n_modes width`` flops a
     sample in products with the weights, so the fit grows with
     ``max_iter`` and the number of signals, not with the records' lengths.
-    On the F-16's 98304 samples an iteration takes 0.52 s on 2 cores, its
-    products alone 0.28 s on one (``benchmarks/bench_lru_iteration.py``).
+    On the F-16's 98304 samples an iteration takes 0.40 s on 2 cores, its
+    products alone 0.29 s on one (``benchmarks/bench_lru_iteration.py``):
+    the fit writes the intermediate signals to arrays it keeps over the
+    iterations, whose pages are then zeroed once, not at every iteration.
 
     Examples
     --------
