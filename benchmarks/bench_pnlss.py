@@ -28,10 +28,18 @@ and filled cache). With ``--pyvib-path`` (a checkout of pawsen/pyvib) and
 runner ``peers/pyvib_pnlss.py`` is run on the same record, one thread, the
 same number of iterations, and the speed-ups are printed. ``--accuracy`` adds
 converged fits and their errors on the official test sets (about 10 minutes;
-``--accuracy-only`` skips the timings).
+``--accuracy-only`` skips the timings). ``--baseline`` (a checkout of an
+earlier commit of this library, e.g. ``git worktree add /tmp/old 32247b8``)
+times the official record's fit (degrees (2, 3), periods averaged, one BLAS
+thread, ``--iterations``) in fresh interpreters of this checkout and the
+baseline in turn, ``--baseline-rounds`` rounds of ``--repeat`` fits each:
+the machine's speed drifts by tens of per cent from hour to hour, so a
+figure measured at another time says little, and a paired ratio does
+(``--baseline-only`` skips the rest).
 
     python benchmarks/bench_pnlss.py [--iterations 10] [--repeat 3]
         [--pyvib-path /tmp/pyvib --pyvib-python /tmp/pyvib-venv/bin/python]
+        [--baseline /tmp/old [--baseline-rounds 5] [--baseline-only]]
         [--accuracy | --accuracy-only] [--data-dir DIR] [--output FILE]
 
 Results go to ``benchmarks/results/pnlss.json``.
@@ -71,6 +79,31 @@ t2 = time.perf_counter()
 fit()
 t3 = time.perf_counter()
 print(json.dumps({"import": t1 - t0, "first_call": t2 - t1, "second_call": t3 - t2}))
+"""
+
+
+# One round of the side by side: the official record's fit, timed in this
+# interpreter (whichever checkout PYTHONPATH puts first), one BLAS thread.
+_BASELINE_FIT = """
+import json, statistics, subprocess, sys, time
+from pathlib import Path
+from threadpoolctl import threadpool_limits
+import sklearn_pnlss
+from sklearn_pnlss import PNLSSRegressor
+from sklearn_pnlss.datasets import load_bouc_wen_official
+data_dir, iterations, repeat = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
+off = load_bouc_wen_official(data_dir)
+def fit():
+    t0 = time.perf_counter()
+    PNLSSRegressor(3, degrees=(2, 3), variables="states", period=8192, max_iter=iterations, tol=0.0,
+                   average_periods=True, grow_degrees=False).fit(off.X_train, off.y_train)
+    return time.perf_counter() - t0
+with threadpool_limits(1):
+    fit()  # compiles or loads the kernels
+    times = [fit() for _ in range(repeat)]
+root = Path(sklearn_pnlss.__file__).resolve().parents[1]
+commit = subprocess.run(["git", "-C", str(root), "rev-parse", "--short", "HEAD"], capture_output=True, text=True)
+print(json.dumps({"times": times, "path": str(root), "commit": commit.stdout.strip()}))
 """
 
 
@@ -246,6 +279,35 @@ def _peer(pyvib_path, pyvib_python, data_dir, iterations):
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
+def _baseline(path, data_dir, iterations, repeat, rounds):
+    """This checkout's and the baseline's fit times, in fresh interpreters
+    in turn (see ``--baseline``): each round's medians and their ratio."""
+    here = str(Path(__file__).resolve().parents[1])
+
+    def round_of(checkout):
+        # run from the checkout: "-c" puts the working directory first on the path
+        env = dict(os.environ, PYTHONPATH=checkout)
+        out = subprocess.run([sys.executable, "-c", _BASELINE_FIT, str(Path(data_dir).resolve()), str(iterations),
+                              str(repeat)], env=env, cwd=checkout, check=True, capture_output=True, text=True)
+        return json.loads(out.stdout.strip().splitlines()[-1])
+
+    runs = []
+    for k in range(rounds):
+        ours, theirs = round_of(here), round_of(str(path))
+        runs.append({"ours_s": statistics.median(ours["times"]), "baseline_s": statistics.median(theirs["times"])})
+        print(f"  round {k + 1}: this checkout {runs[-1]['ours_s']:.3f} s, baseline {theirs['commit']} "
+              f"{runs[-1]['baseline_s']:.3f} s", flush=True)
+    ratios = [r["ours_s"] / r["baseline_s"] for r in runs]
+    summary = {"baseline_commit": theirs["commit"], "commit": ours["commit"], "iterations": iterations,
+               "fits_per_round": repeat, "rounds": runs,
+               "ours_median_s": statistics.median(r["ours_s"] for r in runs),
+               "baseline_median_s": statistics.median(r["baseline_s"] for r in runs),
+               "ratio_median": statistics.median(ratios)}
+    print(f"  median: this checkout {summary['ours_median_s']:.3f} s, baseline {summary['baseline_median_s']:.3f} s, "
+          f"ratio {summary['ratio_median']:.2f} (paired by round)")
+    return summary
+
+
 def _store(results, section, value):
     """A section measured by this run, with the run's date (the sections
     not rerun keep theirs)."""
@@ -262,16 +324,28 @@ def main(argv=None):
                         help="only the converged fits; the other results in --output are kept")
     parser.add_argument("--pyvib-path", help="checkout of pawsen/pyvib to run side by side")
     parser.add_argument("--pyvib-python", default=sys.executable, help="interpreter with pyvib's dependencies")
+    parser.add_argument("--baseline", help="checkout of an earlier commit of this library to time side by side")
+    parser.add_argument("--baseline-rounds", type=int, default=5, help="rounds of the side by side (default 5)")
+    parser.add_argument("--baseline-only", action="store_true",
+                        help="only the side by side; the other results in --output are kept")
     parser.add_argument("--output", default=str(DEFAULT_OUTPUT))
     args = parser.parse_args(argv)
     # The sections not rerun (the converged fits, the peer) are kept as they
     # were measured, each with the date of its run.
     previous = json.loads(Path(args.output).read_text()) if Path(args.output).exists() else {}
     results = header()
-    for section in ("speed", "compile", "accuracy", "peer"):
+    for section in ("speed", "compile", "accuracy", "peer", "baseline"):
         if section in previous:
             results[section] = previous[section]
             results[f"{section}_date"] = previous.get(f"{section}_date", previous.get("date"))
+    if args.baseline:
+        print(f"side by side with {args.baseline} ({args.iterations} iterations, one BLAS thread, "
+              f"{args.baseline_rounds} rounds of {args.repeat} fits)")
+        _store(results, "baseline", _baseline(args.baseline, args.data_dir, args.iterations, args.repeat,
+                                              args.baseline_rounds))
+        if args.baseline_only:
+            write_results(results, args.output)
+            return
     if args.accuracy_only:
         print("accuracy (converged fits, official test sets)")
         _store(results, "accuracy", _accuracy(args.data_dir))
