@@ -1,5 +1,7 @@
 """Discrete-time linear state-space models: simulation, frequency response,
 periodic steady state and modal parameters."""
+from functools import lru_cache
+
 import numba
 import numpy as np
 
@@ -94,12 +96,28 @@ _EIGVEC_COND = 1e6
 
 
 def _eigen(A):
-    """``(lam, V, V^-1)`` of ``A``, or None when its eigenvectors are too ill
-    conditioned to give the resolvent accurately."""
+    """``(lam, V, V^-1)`` of ``A`` (read-only), or None when its
+    eigenvectors are too ill conditioned to give the resolvent accurately.
+
+    The last few are kept: a frequency-domain refinement asks for the same
+    ``A`` two or three times at each of its trial models (the gain outside
+    the band, the residual, its Jacobian once the trial is accepted), and
+    each decomposition costs about a tenth of a millisecond of numpy's
+    overhead (a fifth of the Bouc-Wen BLA's refinements)."""
+    A = np.asarray(A)
+    return _eigen_of(A.tobytes(), A.shape, A.dtype.str)
+
+
+@lru_cache(maxsize=8)
+def _eigen_of(data, shape, dtype):
+    A = np.frombuffer(data, dtype=dtype).reshape(shape)
     lam, V = np.linalg.eig(A)
     if not np.linalg.cond(V) < _EIGVEC_COND:
         return None
-    return lam, V, np.linalg.inv(V)
+    parts = lam, V, np.linalg.inv(V)
+    for part in parts:
+        part.setflags(write=False)
+    return parts
 
 
 def resolvent_products(A, z, B=None, C=None):

@@ -376,7 +376,16 @@ def fd_refine(A, B, C, D, G, z, *, var=None, estimate_d=True, max_iter=100, warp
         J = J.reshape(K * p * m, -1)
         return e, np.concatenate([J.real, J.imag])
 
+    last = {}  # the last residual, by its parameters: the start's is asked for twice (here, then by LM)
+
     def residual(theta):
+        key = theta.tobytes()
+        if key not in last:
+            last.clear()
+            last[key] = trial_residual(theta)
+        return last[key]
+
+    def trial_residual(theta):
         if radius is not None and not inside(_unpack(theta, n, m, p, estimate_d)[0]):
             return None  # a failed step: LM shortens it
         try:
