@@ -272,7 +272,7 @@ if train is not None:
 #   better of two starts, reaches 0.137, 0.131, 0.128 and 0.132 on four
 #   draws; the mean of two such draws reaches 0.128 and 0.126 on the two
 #   pairs, level 6 below the deep LRU's figures on both, in about ten
-#   minutes (525 and 539 s). The model of the
+#   minutes (497 and 495 s). The model of the
 #   band spreads over random starts, so a pair of draws at the median
 #   lands near 0.131 (``benchmarks/f16_member_spread.py``). Near a
 #   resonance a member may jump onto a response several times the

@@ -81,9 +81,13 @@ class AveragedRegressor(DynamicRegressorMixin, BaseEstimator):
         one, -1 as many as there are cores; threads, as the library's
         compiled kernels release the GIL), each on BLAS on one thread
         while several run at once (BLAS threaded in each, two F-16 members
-        contended for the cores: 123 s, against 66 s). A member that fits
-        its own starts in parallel (``n_jobs`` of the decoupled model)
-        already uses the cores: keep this at None then.
+        contended for the cores: 123 s, against 66 s). Members that fit
+        their own starts in parallel too (``n_jobs`` of the decoupled
+        model) share the cores start by start, so a member whose fit ends
+        early leaves its core to the others: on the F-16
+        (``benchmarks/f16_lru.py``), two members of two starts each took 75
+        s with ``n_jobs=2`` in both, against 90 s with each member's starts
+        in turn (one member ended at 54 s), the same members bit for bit.
     random_state : int, RandomState instance or None, default=None
         The members' seeds. An int ``s`` seeds the ``k``-th member with
         ``s + k``, so the first member is the model ``regressor`` would be
