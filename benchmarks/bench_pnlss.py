@@ -85,7 +85,7 @@ print(json.dumps({"import": t1 - t0, "first_call": t2 - t1, "second_call": t3 - 
 # One round of the side by side: the official record's fit, timed in this
 # interpreter (whichever checkout PYTHONPATH puts first), one BLAS thread.
 _BASELINE_FIT = """
-import json, statistics, subprocess, sys, time
+import json, subprocess, sys, time
 from pathlib import Path
 from threadpoolctl import threadpool_limits
 import sklearn_pnlss

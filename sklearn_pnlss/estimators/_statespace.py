@@ -129,10 +129,11 @@ class StateSpaceRegressorBase(SignalRegressorBase):
         # checked before a model is returned: it must not run away on new
         # realisations of the training excitation, and must settle on the
         # training inputs repeated from rest (periodic inputs only)
+        check_records = self._check_records(X_check)
         settings = replace(self._fit_settings(), new_inputs=random_phase_inputs(
             X_list, self.period_, random_state=self.random_state),
-            training_periods=training_periods(X_list, self.period_), check_records=self._check_records(X_check),
-            check_outputs=self._check_outputs(y_check, X_check))
+            training_periods=training_periods(X_list, self.period_), check_records=check_records,
+            check_outputs=self._check_outputs(y_check, X_check is not None, check_records))
         weights = self._check_time_weight(time_weight, y_list)
         if self.weighting == "relative":
             weights = relative_weights(y_list, weights)
@@ -211,15 +212,15 @@ class StateSpaceRegressorBase(SignalRegressorBase):
                              "give the check records the training inputs' channels.")
         return tuple(U_list)
 
-    def _check_outputs(self, y_check, X_check):
+    def _check_outputs(self, y_check, has_records, records):
         """``y_check`` as a tuple of 2-D outputs, one per check record
-        (empty when None)."""
+        (``records``: :meth:`_check_records` of ``X_check``, given when
+        ``has_records``), or empty when None."""
         if y_check is None:
             return ()
-        if X_check is None:
+        if not has_records:
             raise ValueError("y_check was given without X_check: pass the check records' inputs as X_check.")
         Y_list, _ = as_signal_list(y_check, name="y_check")
-        records = self._check_records(X_check)
         if len(Y_list) != len(records) or any(Y.shape[0] != U.shape[0] for Y, U in zip(Y_list, records)):
             raise ValueError("y_check must hold one output signal per X_check record, of the same length; got "
                              f"{[Y.shape[0] for Y in Y_list]} samples for {[U.shape[0] for U in records]}.")
