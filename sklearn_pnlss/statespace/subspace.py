@@ -265,6 +265,43 @@ def _unpack(theta, n, m, p, estimate_d):
     return A, B, C, D
 
 
+def _frf_jacobian(CP, PB, w, estimate_d, tie=None):
+    """The Jacobian of the weighted FRF residual of :func:`fd_refine` in
+    ``A, B, C`` (and ``D`` with ``estimate_d``), rows ``[real; imag]`` of
+    each line's (p, m) entries: dG_ab/dA_ij = CP_ai PB_jb, dG_ab/dB_ij =
+    CP_ai d_jb, dG_ab/dC_ij = d_ai PB_jb, dG_ab/dD_ij = d_ai d_bj, times the
+    line's weight ``w``. ``tie``: ``(a, C M^-1, M^-1 B)`` when the direct
+    term is tied to ``D = a C M^-1 B`` (``M = I + a A``), whose derivatives
+    are then added.
+
+    Written into one real array: the B, C and D columns copied from ``CP``,
+    ``PB`` and ones rather than formed as complex products with identities,
+    concatenated and split into real and imaginary parts (the same numbers,
+    in half the time: a tenth of the Bouc-Wen BLA's refinements)."""
+    K, p, n = CP.shape
+    m = PB.shape[2]
+    nn, nm, pn = n * n, n * m, p * n
+    J = np.zeros((2, K, p, m, nn + nm + pn + (p * m if estimate_d else 0)))
+    JA = np.einsum("kai,kjb->kabij", CP, PB).reshape(K, p, m, nn)
+    J[0, ..., :nn] = JA.real if tie is None else JA.real - tie[0] * tie[0] * np.einsum(
+        "ai,jb->abij", tie[1], tie[2]).reshape(p, m, nn)
+    J[1, ..., :nn] = JA.imag
+    for b in range(m):
+        J[0, :, :, b, nn + b : nn + nm : m] = CP.real
+        J[1, :, :, b, nn + b : nn + nm : m] = CP.imag
+        for a in range(p):
+            J[0, :, a, b, nn + nm + a * n : nn + nm + (a + 1) * n] = PB.real[:, :, b]
+            J[1, :, a, b, nn + nm + a * n : nn + nm + (a + 1) * n] = PB.imag[:, :, b]
+            if estimate_d:
+                J[0, :, a, b, nn + nm + pn + a * m + b] = 1.0
+    if tie is not None:
+        a, CM, MB = tie
+        J[0, ..., nn : nn + nm] += (a * np.einsum("ai,jb->abij", CM, np.eye(m))).reshape(p, m, nm)
+        J[0, ..., nn + nm : nn + nm + pn] += (a * np.einsum("ai,jb->abij", np.eye(p), MB)).reshape(p, m, pn)
+    J *= w[None, :, None, None, None]
+    return J.reshape(2 * K * p * m, -1)
+
+
 def fd_refine(A, B, C, D, G, z, *, var=None, estimate_d=True, max_iter=100, warp="auto",
               stability_margin=0.0, bound_points=None, bound=None, stay_stable=True):
     """Refine a linear model by weighted least squares on the FRF.
@@ -357,24 +394,7 @@ def fd_refine(A, B, C, D, G, z, *, var=None, estimate_d=True, max_iter=100, warp
         e = np.concatenate([E.real, E.imag])
         if not jacobian:
             return e, None
-        # dG_ab/dA_ij = CP_ai PB_jb ; dG_ab/dB_ij = CP_ai d_jb ; dG_ab/dC_ij = d_ai PB_jb
-        JA = np.einsum("kai,kjb->kabij", CP, PB).reshape(K, p, m, n * n)
-        JB = np.einsum("kai,jb->kabij", CP, np.eye(m)).reshape(K, p, m, n * m)
-        JC = np.einsum("ai,kjb->kabij", np.eye(p), PB).reshape(K, p, m, p * n)
-        if tied:  # + derivatives of D = a C M^-1 B, M = I + a A
-            JA = JA - a * a * np.einsum("ai,jb->abij", CM, MB).reshape(p, m, n * n)
-            JB = JB + a * np.einsum("ai,jb->abij", CM, np.eye(m)).reshape(p, m, n * m)
-            JC = JC + a * np.einsum("ai,jb->abij", np.eye(p), MB).reshape(p, m, p * n)
-        blocks = [JA, JB, JC]
-        if estimate_d:
-            JD = np.broadcast_to(
-                np.einsum("ai,bj->abij", np.eye(p), np.eye(m)).reshape(p, m, p * m),
-                (K, p, m, p * m),
-            )
-            blocks.append(JD)
-        J = np.concatenate(blocks, axis=3) * w[:, None, None, None]
-        J = J.reshape(K * p * m, -1)
-        return e, np.concatenate([J.real, J.imag])
+        return e, _frf_jacobian(CP, PB, w, estimate_d, (a, CM, MB) if tied else None)
 
     last = {}  # the last residual, by its parameters: the start's is asked for twice (here, then by LM)
 
