@@ -5,7 +5,7 @@ from numbers import Integral, Real
 import numpy as np
 
 from ..frequency.bla import periodic_bla, welch_bla
-from ..statespace.linear import (frequency_response, is_stable, modal_parameters, simulate_linear,
+from ..statespace.linear import (frequency_response, is_stable, modal_parameters, peak_gain, simulate_linear,
                                 simulate_linear_signal)
 from ..statespace.scaled import linear_scaled_model
 from ..statespace.subspace import fd_refine, fd_subspace, frf_weights
@@ -472,8 +472,8 @@ class BLAEstimator(SignalRegressorBase):
         if not is_stable(model[0], margin=self._decay_margin()):
             return False
         points = self._outside_points()
-        allowed = np.maximum(np.max(np.abs(G), axis=0), np.abs(frequency_response(*start, points)).max(axis=0))
-        return bool(np.all(np.abs(frequency_response(*model, points)).max(axis=0) <= np.sqrt(2.0) * allowed))
+        allowed = np.maximum(np.max(np.abs(G), axis=0), peak_gain(*start, points))
+        return bool(np.all(peak_gain(*model, points) <= np.sqrt(2.0) * allowed))
 
     def _start_fit(self, G, z, var, warp, q):
         """The subspace fit with ``q`` block rows on the ``warp`` axis, refined."""

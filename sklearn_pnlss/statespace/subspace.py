@@ -25,7 +25,7 @@ import numpy as np
 from scipy.linalg import qr, sqrtm, svd
 
 from .levenberg_marquardt import levenberg_marquardt
-from .linear import frequency_response, is_stable, resolvent_products, stabilize
+from .linear import is_stable, peak_gain, resolvent_products, stabilize
 
 __all__ = ["fd_subspace", "fd_refine", "frf_weights", "band_warp", "warp_model"]
 
@@ -366,7 +366,7 @@ def fd_refine(A, B, C, D, G, z, *, var=None, estimate_d=True, max_iter=100, warp
         bound_w = (bound_points - a) / (1 - a * bound_points)
         with np.errstate(all="ignore"):
             try:
-                start_gain = np.max(np.abs(frequency_response(A, B, C, D, bound_points)), axis=0)
+                start_gain = peak_gain(A, B, C, D, bound_points)
             except np.linalg.LinAlgError:
                 start_gain = np.full((p, m), np.inf)
         cap = np.maximum(np.broadcast_to(np.asarray(bound, dtype=float), (p, m)), start_gain)
@@ -378,7 +378,7 @@ def fd_refine(A, B, C, D, G, z, *, var=None, estimate_d=True, max_iter=100, warp
         if tied:
             D_ = a * C_ @ np.linalg.solve(eye + a * A_, B_)
         with np.errstate(all="ignore"):
-            gain = np.max(np.abs(frequency_response(A_, B_, C_, D_, bound_w)), axis=0)
+            gain = peak_gain(A_, B_, C_, D_, bound_w)
         return bool(np.all(gain <= cap))
     # In zeta the direct term is free, or tied to D = 0 in z (fd_subspace).
     tied = not estimate_d and a != 0.0
