@@ -96,7 +96,7 @@ class PNLSSModel(StateSpaceModel):
 
     def _excursions_in_turn(self, U, n_records, r0, r1, factor, stop_at_first, out):
         """The records side by side in one compiled kernel: the excursions
-        of one input at a time, 2.5 times as fast."""
+        of one input at a time, three times as fast."""
         lo, hi = self._bounds()
         pnlss_excursions_in_turn(self.A, self.B, self.E, self.exE, lo, hi, U, n_records, r0, r1, factor,
                                  stop_at_first, out)
