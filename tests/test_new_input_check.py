@@ -191,21 +191,22 @@ def test_an_iterate_worse_than_its_start_on_a_measured_check_record_is_not_kept(
         def __init__(self, offset):
             self.offset = offset
 
-        def runs_away(self, U):
-            return False
-
         def runaways_in_turn(self, inputs, stop_at_first=False):
             return []
 
-        def simulate(self, U):
-            return U + self.offset, None
+        def simulate_with_excursion(self, U):
+            self.runs = getattr(self, "runs", 0) + 1
+            return U + self.offset, 0.0  # the output, and no excursion past the range
 
     order = [(k, None, np.nan, 1.0) for k in range(10, -1, -1)]
     offsets = {k: (0.5 if k >= 7 else 0.1 * (7 - k) / 7) for k in range(11)}  # the start 0.1 off
     records = [np.zeros((8, 1)), np.ones((8, 1))]
     outputs = [records[0] + 0.05, records[1] + 0.05]
-    kept, report = _sane_on_new_inputs(order, lambda it: StandIn(offsets[it[0]]), [], (), records, outputs)
+    models = {k: StandIn(offsets[k]) for k in range(11)}
+    kept, report = _sane_on_new_inputs(order, lambda it: models[it[0]], [], (), records, outputs)
     assert kept[0] == 6
+    # each record simulated once for each model probed: its output and its excursion from the one run
+    assert max(getattr(m, "runs", 0) for m in models.values()) == len(records)
     assert (report.worse_records, report.runaway_records, report.kept_iteration) == ((0, 1), (), 6)
     message = report.message("the latest")
     assert "simulates 2 of the 2 check records (X_check[0], X_check[1]) from rest worse than the fit's start" in message

@@ -483,14 +483,25 @@ def _sane_on_new_inputs(order, bounded_model, new_inputs, training_periods=(), c
     every input."""
     # each fault the report holds: its field there, the inputs, the places in them a model fails on
     # (for a verdict, as far as the first: the rest need not be simulated)
-    record_error = partial(_rms_record_error, records=check_records, outputs=check_outputs)
+    runs = {}  # id(model) -> (model, {record: (output, excursion)}): one simulation serves both record checks
+
+    def record_run(model, i):
+        done = runs.setdefault(id(model), (model, {}))[1]  # the model held, so that its id is not reused
+        if i not in done:
+            done[i] = model.simulate_with_excursion(check_records[i])
+        return done[i]
+
+    def record_error(model, i):
+        Y = record_run(model, i)[0]
+        return np.inf if Y is None else float(np.sqrt(np.mean((Y - check_outputs[i]) ** 2)))
+
     start_errors = [record_error(bounded_model(min(order, key=lambda it: it[0])), i)
                     for i in range(len(check_outputs))]
     checks = (
         ("n_runaway", new_inputs,
          lambda model, inputs, verdict: model.runaways_in_turn(inputs, stop_at_first=verdict)),
         ("runaway_records", check_records,
-         lambda model, inputs, verdict: (i for i, U in enumerate(inputs) if model.runs_away(U))),
+         lambda model, inputs, verdict: (i for i in range(len(inputs)) if record_run(model, i)[1] > 1.0)),
         ("n_unsettled", training_periods,
          lambda model, inputs, verdict: (i for i, U in enumerate(inputs) if not model.settles(U))),
         ("worse_records", check_outputs,
@@ -525,12 +536,3 @@ def _sane_on_new_inputs(order, bounded_model, new_inputs, training_periods=(), c
         middle = (failed + probe) // 2
         failed, probe = (failed, middle) if passes(middle) else (middle, probe)
     return order[probe], report(kept_iteration=order[probe][0])
-
-
-def _rms_record_error(model, i, records, outputs):
-    """The rms error of ``model`` simulated from rest on ``records[i]``
-    against ``outputs[i]`` (inf when it diverges)."""
-    try:
-        return float(np.sqrt(np.mean((model.simulate(records[i])[0] - outputs[i]) ** 2)))
-    except DivergenceError:
-        return np.inf

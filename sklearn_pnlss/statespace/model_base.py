@@ -257,6 +257,17 @@ class StateSpaceModel:
         except DivergenceError:
             return np.inf
 
+    def simulate_with_excursion(self, U):
+        """``(Y, excursion)``: the output of ``U`` simulated from rest and
+        :meth:`range_excursion` along that simulation, from the one run
+        (``(None, inf)`` when it diverges): a check record is checked for
+        both."""
+        try:
+            Y, X, _ = self._checked_run(U)
+        except DivergenceError:
+            return None, np.inf
+        return Y, self._excursion(np.hstack([X, U]))
+
     def _excursion(self, states_inputs):
         """:meth:`range_excursion` along the rows ``[x; u]`` given."""
         # a variable a row: numpy reduces a few long rows some ten times
