@@ -32,8 +32,8 @@ converged fits and their errors on the official test sets (about 10 minutes;
 earlier commit of this library, e.g. ``git worktree add /tmp/old 32247b8``)
 times the official record's fit (degrees (2, 3), periods averaged, one BLAS
 thread, ``--iterations``) in fresh interpreters of this checkout and the
-baseline in turn, ``--baseline-rounds`` rounds of ``--repeat`` fits each:
-the machine's speed drifts by tens of per cent from hour to hour, so a
+baseline in turn, ``--baseline-rounds`` rounds of ``--repeat`` fits each
+(and of the fit's linear start alone): the machine's speed drifts by tens of per cent from hour to hour, so a
 figure measured at another time says little, and a paired ratio does
 (``--baseline-only`` skips the rest).
 
@@ -89,21 +89,24 @@ import json, subprocess, sys, time
 from pathlib import Path
 from threadpoolctl import threadpool_limits
 import sklearn_pnlss
-from sklearn_pnlss import PNLSSRegressor
+from sklearn_pnlss import BLAEstimator, PNLSSRegressor
 from sklearn_pnlss.datasets import load_bouc_wen_official
 data_dir, iterations, repeat = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 off = load_bouc_wen_official(data_dir)
-def fit():
+def timed(estimator):
     t0 = time.perf_counter()
-    PNLSSRegressor(3, degrees=(2, 3), variables="states", period=8192, max_iter=iterations, tol=0.0,
-                   average_periods=True, grow_degrees=False).fit(off.X_train, off.y_train)
+    estimator.fit(off.X_train, off.y_train)
     return time.perf_counter() - t0
+def fit():
+    return timed(PNLSSRegressor(3, degrees=(2, 3), variables="states", period=8192, max_iter=iterations, tol=0.0,
+                                average_periods=True, grow_degrees=False))
 with threadpool_limits(1):
     fit()  # compiles or loads the kernels
     times = [fit() for _ in range(repeat)]
+    linear = [timed(BLAEstimator(3, period=8192)) for _ in range(repeat)]  # the fit's linear start alone
 root = Path(sklearn_pnlss.__file__).resolve().parents[1]
 commit = subprocess.run(["git", "-C", str(root), "rev-parse", "--short", "HEAD"], capture_output=True, text=True)
-print(json.dumps({"times": times, "path": str(root), "commit": commit.stdout.strip()}))
+print(json.dumps({"times": times, "linear_times": linear, "path": str(root), "commit": commit.stdout.strip()}))
 """
 
 
@@ -294,17 +297,25 @@ def _baseline(path, data_dir, iterations, repeat, rounds):
     runs = []
     for k in range(rounds):
         ours, theirs = round_of(here), round_of(str(path))
-        runs.append({"ours_s": statistics.median(ours["times"]), "baseline_s": statistics.median(theirs["times"])})
-        print(f"  round {k + 1}: this checkout {runs[-1]['ours_s']:.3f} s, baseline {theirs['commit']} "
-              f"{runs[-1]['baseline_s']:.3f} s", flush=True)
+        runs.append({"ours_s": statistics.median(ours["times"]), "baseline_s": statistics.median(theirs["times"]),
+                     "ours_linear_s": statistics.median(ours["linear_times"]),
+                     "baseline_linear_s": statistics.median(theirs["linear_times"])})
+        print(f"  round {k + 1}: this checkout {runs[-1]['ours_s']:.3f} s (linear start {runs[-1]['ours_linear_s']:.3f}),"
+              f" baseline {theirs['commit']} {runs[-1]['baseline_s']:.3f} s ({runs[-1]['baseline_linear_s']:.3f})",
+              flush=True)
     ratios = [r["ours_s"] / r["baseline_s"] for r in runs]
     summary = {"baseline_commit": theirs["commit"], "commit": ours["commit"], "iterations": iterations,
                "fits_per_round": repeat, "rounds": runs,
                "ours_median_s": statistics.median(r["ours_s"] for r in runs),
                "baseline_median_s": statistics.median(r["baseline_s"] for r in runs),
-               "ratio_median": statistics.median(ratios)}
+               "ratio_median": statistics.median(ratios),
+               "ours_linear_median_s": statistics.median(r["ours_linear_s"] for r in runs),
+               "baseline_linear_median_s": statistics.median(r["baseline_linear_s"] for r in runs),
+               "linear_ratio_median": statistics.median(r["ours_linear_s"] / r["baseline_linear_s"] for r in runs)}
     print(f"  median: this checkout {summary['ours_median_s']:.3f} s, baseline {summary['baseline_median_s']:.3f} s, "
-          f"ratio {summary['ratio_median']:.2f} (paired by round)")
+          f"ratio {summary['ratio_median']:.2f} (paired by round); the linear start alone "
+          f"{summary['ours_linear_median_s']:.3f} s against {summary['baseline_linear_median_s']:.3f} s, "
+          f"ratio {summary['linear_ratio_median']:.2f}")
     return summary
 
 

@@ -450,7 +450,9 @@ class BLAEstimator(SignalRegressorBase):
         """Up to 2048 points of the unit circle at the lines outside the
         excited band, where the refinement caps the model's gain."""
         N = self._n_per_period
-        outside = np.setdiff1d(np.arange(N // 2 + 1), self.lines_)
+        outside = np.ones(N // 2 + 1, dtype=bool)  # a mask, not np.setdiff1d: its sort took 3 ms of 50 a BLA
+        outside[self.lines_[(self.lines_ >= 0) & (self.lines_ <= N // 2)]] = False
+        outside = np.flatnonzero(outside)
         outside = outside[np.linspace(0, outside.size - 1, min(outside.size, 2048)).astype(int)]
         return np.exp(2j * np.pi * outside / N)
 
