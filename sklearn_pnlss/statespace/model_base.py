@@ -303,8 +303,13 @@ class StateSpaceModel:
         record_samples = U.shape[1] * -(-len(U) // CHECK_RECORDS)
         over_column_spans(
             lambda r0, r1: self._excursions_in_turn(U, CHECK_RECORDS, r0, r1, factor, stop_at_first, excursions),
-            CHECK_RECORDS, -(-RECORD_PART_SAMPLES // record_samples))
+            CHECK_RECORDS, self._records_a_thread(record_samples))
         return np.flatnonzero(excursions > factor)
+
+    def _records_a_thread(self, record_samples):
+        """The fewest check records of ``record_samples`` samples worth a
+        thread of their own (see :data:`RECORD_PART_SAMPLES`)."""
+        return -(-RECORD_PART_SAMPLES // record_samples)
 
     def _excursions_in_turn(self, U, n_records, r0, r1, factor, stop_at_first, out):
         """The excursions of :meth:`runaways_in_turn` (``out[i]`` for input
