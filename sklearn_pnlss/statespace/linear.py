@@ -180,8 +180,9 @@ def peak_gain(A, B, C, D, z):
     The modes' sum is one matrix product over all points, ``R M`` with
     ``R_kj = 1 / (z_k - lam_j)`` and ``M_j = (C V)_j (V^-1 B)_j``, rather
     than :func:`frequency_response`'s broadcast products summed mode by
-    mode: 15 us instead of 100 at 2,048 points and three states (the
-    Bouc-Wen BLA's refinements check every trial model). Its last bits may
+    mode: 65 us instead of 130 at 2,048 points and three states, 0.3 ms
+    instead of 2.3 at 18 states and three outputs (a BLA's refinements
+    check every trial model). Its last bits may
     differ from :func:`frequency_response`'s, which does not matter for a
     gain that is only compared with a bound."""
     z = np.atleast_1d(np.asarray(z, dtype=complex))
