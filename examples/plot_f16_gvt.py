@@ -271,8 +271,8 @@ if train is not None:
 #   mean of two fits of the 18-state model with cubic branches, each the
 #   better of two starts, reaches 0.137, 0.131, 0.128 and 0.132 on four
 #   draws; the mean of two such draws reaches 0.128 and 0.126 on the two
-#   pairs, level 6 below the deep LRU's figures on both, in about ten
-#   minutes (497 and 495 s). The model of the
+#   pairs, level 6 below the deep LRU's figures on both, in under eight
+#   minutes (475 and 474 s). The model of the
 #   band spreads over random starts, so a pair of draws at the median
 #   lands near 0.131 (``benchmarks/f16_member_spread.py``). Near a
 #   resonance a member may jump onto a response several times the
