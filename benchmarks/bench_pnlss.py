@@ -33,9 +33,9 @@ earlier commit of this library, e.g. ``git worktree add /tmp/old 32247b8``)
 times the official record's fit (degrees (2, 3), periods averaged, one BLAS
 thread, ``--iterations``) in fresh interpreters of this checkout and the
 baseline in turn, ``--baseline-rounds`` rounds of ``--repeat`` fits each
-(and of the fit's linear start alone): the machine's speed drifts by tens of per cent from hour to hour, so a
-figure measured at another time says little, and a paired ratio does
-(``--baseline-only`` skips the rest).
+(and of the fit's linear start alone): the machine's speed drifts by tens
+of per cent from hour to hour, so a figure measured at another time says
+little, and a paired ratio does (``--baseline-only`` skips the rest).
 
     python benchmarks/bench_pnlss.py [--iterations 10] [--repeat 3]
         [--pyvib-path /tmp/pyvib --pyvib-python /tmp/pyvib-venv/bin/python]
@@ -300,9 +300,9 @@ def _baseline(path, data_dir, iterations, repeat, rounds):
         runs.append({"ours_s": statistics.median(ours["times"]), "baseline_s": statistics.median(theirs["times"]),
                      "ours_linear_s": statistics.median(ours["linear_times"]),
                      "baseline_linear_s": statistics.median(theirs["linear_times"])})
-        print(f"  round {k + 1}: this checkout {runs[-1]['ours_s']:.3f} s (linear start {runs[-1]['ours_linear_s']:.3f}),"
-              f" baseline {theirs['commit']} {runs[-1]['baseline_s']:.3f} s ({runs[-1]['baseline_linear_s']:.3f})",
-              flush=True)
+        last = runs[-1]
+        print(f"  round {k + 1}: this checkout {last['ours_s']:.3f} s (linear start {last['ours_linear_s']:.3f}),"
+              f" baseline {theirs['commit']} {last['baseline_s']:.3f} s ({last['baseline_linear_s']:.3f})", flush=True)
     ratios = [r["ours_s"] / r["baseline_s"] for r in runs]
     summary = {"baseline_commit": theirs["commit"], "commit": ours["commit"], "iterations": iterations,
                "fits_per_round": repeat, "rounds": runs,

@@ -1,9 +1,9 @@
 """Discrete-time linear state-space models: simulation, frequency response,
 periodic steady state and modal parameters."""
-from functools import lru_cache
-
 import numba
 import numpy as np
+
+from ..utils.memo import last_results
 
 __all__ = [
     "simulate_linear",
@@ -96,6 +96,7 @@ def simulate_linear(A, B, C, D, U, x0=None):
 _EIGVEC_COND = 1e6
 
 
+@last_results(maxsize=8)
 def _eigen(A):
     """``(lam, V, V^-1)`` of ``A`` (read-only), or None when its
     eigenvectors are too ill conditioned to give the resolvent accurately.
@@ -105,20 +106,10 @@ def _eigen(A):
     the band, the residual, its Jacobian once the trial is accepted), and
     each decomposition costs about a tenth of a millisecond of numpy's
     overhead (a fifth of the Bouc-Wen BLA's refinements)."""
-    A = np.asarray(A)
-    return _eigen_of(A.tobytes(), A.shape, A.dtype.str)
-
-
-@lru_cache(maxsize=8)
-def _eigen_of(data, shape, dtype):
-    A = np.frombuffer(data, dtype=dtype).reshape(shape)
     lam, V = np.linalg.eig(A)
     if not np.linalg.cond(V) < _EIGVEC_COND:
         return None
-    parts = lam, V, np.linalg.inv(V)
-    for part in parts:
-        part.setflags(write=False)
-    return parts
+    return lam, V, np.linalg.inv(V)
 
 
 def resolvent_products(A, z, B=None, C=None):

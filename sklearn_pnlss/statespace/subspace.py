@@ -21,11 +21,10 @@ non-parametric noise models", Automatica 38(8); on the frequency warping by
 an all-pass map, Oppenheim & Johnson (1972), "Discrete representation of
 signals", Proc. IEEE 60(6).
 """
-from functools import lru_cache
-
 import numpy as np
 from scipy.linalg import qr, sqrtm, svd
 
+from ..utils.memo import last_results
 from .levenberg_marquardt import levenberg_marquardt
 from .linear import is_stable, peak_gain, resolvent_products, stabilize
 
@@ -117,23 +116,11 @@ def frf_weights(G, var):
     (eighteen times on Bouc-Wen), and their medians cost a fifth of a
     millisecond each.
     """
-    G = np.asarray(G, dtype=complex)
-    if var is None:
-        return _frf_weights_of(G.tobytes(), G.shape, None, None)
-    var = np.asarray(var, dtype=float)
-    return _frf_weights_of(G.tobytes(), G.shape, var.tobytes(), var.shape)
+    return _frf_weights(np.asarray(G, dtype=complex), None if var is None else np.asarray(var, dtype=float))
 
 
-@lru_cache(maxsize=4)
-def _frf_weights_of(G_bytes, G_shape, var_bytes, var_shape):
-    G = np.frombuffer(G_bytes, dtype=complex).reshape(G_shape)
-    var = None if var_bytes is None else np.frombuffer(var_bytes, dtype=float).reshape(var_shape)
-    w = _weights_from(G, var)
-    w.setflags(write=False)
-    return w
-
-
-def _weights_from(G, var):
+@last_results(maxsize=4)
+def _frf_weights(G, var):
     K = G.shape[0]
     # Without a variance, weigh relative to the FRF level so that residuals
     # are of order one and the solver's tolerances mean something.
@@ -307,8 +294,7 @@ def _frf_jacobian(CP, PB, w, estimate_d, tie=None):
     nn, nm, pn = n * n, n * m, p * n
     J = np.zeros((2, K, p, m, nn + nm + pn + (p * m if estimate_d else 0)))
     JA = np.einsum("kai,kjb->kabij", CP, PB).reshape(K, p, m, nn)
-    J[0, ..., :nn] = JA.real if tie is None else JA.real - tie[0] * tie[0] * np.einsum(
-        "ai,jb->abij", tie[1], tie[2]).reshape(p, m, nn)
+    J[0, ..., :nn] = JA.real
     J[1, ..., :nn] = JA.imag
     for b in range(m):
         J[0, :, :, b, nn + b : nn + nm : m] = CP.real
@@ -320,6 +306,7 @@ def _frf_jacobian(CP, PB, w, estimate_d, tie=None):
                 J[0, :, a, b, nn + nm + pn + a * m + b] = 1.0
     if tie is not None:
         a, CM, MB = tie
+        J[0, ..., :nn] -= (a * a * np.einsum("ai,jb->abij", CM, MB)).reshape(p, m, nn)
         J[0, ..., nn : nn + nm] += (a * np.einsum("ai,jb->abij", CM, np.eye(m))).reshape(p, m, nm)
         J[0, ..., nn + nm : nn + nm + pn] += (a * np.einsum("ai,jb->abij", np.eye(p), MB)).reshape(p, m, pn)
     J *= w[None, :, None, None, None]
