@@ -335,7 +335,7 @@ def _direct_columns(n, m, nE, c0, c1):
     parameter ``A[i, v]``, ``B[i, v - n]`` or ``E[i, v - n - m]``, or -1
     outside the columns ``c0:c1`` held. One loop over the terms with a
     table, where a loop per block (n, m and nE columns) paid for three
-    loops' entries: 0.3 ms of a 3.4 ms Jacobian on Bouc-Wen."""
+    loops' entries (Bouc-Wen's Jacobian: 3.4 -> 2.9 ms a call)."""
     nv = n + m
     out = np.full((n, nv + nE), -1, dtype=np.int64)
     for i in range(n):
