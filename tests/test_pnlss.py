@@ -32,6 +32,26 @@ def test_jacobian_is_exact():
     assert np.abs(J - J_fd).max() < 1e-7 * np.abs(J).max()
 
 
+
+def test_jacobian_is_exact_past_the_written_out_factors_and_rows():
+    """Five states, two inputs and outputs, degree 4 over all seven
+    variables: monomials of four factors and linear maps of five rows run
+    past the kernels' written-out first three factors and four rows."""
+    rng = np.random.default_rng(3)
+    n, m, p = 5, 2, 2
+    exE, exF = monomial_exponents(n + m, (2, 4)), monomial_exponents(n + m, (3,))
+    A = rng.standard_normal((n, n))
+    model = PNLSSModel(A=0.8 * A / np.abs(np.linalg.eigvals(A)).max(), B=rng.standard_normal((n, m)),
+                       C=rng.standard_normal((p, n)), D=rng.standard_normal((p, m)),
+                       E=0.01 * rng.standard_normal((n, len(exE))), F=0.01 * rng.standard_normal((p, len(exF))),
+                       exE=exE, exF=exF)
+    assert np.count_nonzero(exE, axis=1).max() == 4
+    U = 0.3 * rng.standard_normal((60, m))
+    seg = [Segment(U, np.zeros((55, p)), 5)]
+    J = model.jacobian(seg)
+    J_fd = finite_difference_jacobian(model, seg)
+    assert np.abs(J - J_fd).max() < 1e-7 * np.abs(J).max()
+
 @pytest.mark.parametrize(
     "degrees, variables, n_params, n_nonlinear",
     [((2,), "states", 34, 18), ((2, 3), "states", 64, 48), ((2, 3, 4), "states", 109, 93),
