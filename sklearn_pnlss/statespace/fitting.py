@@ -25,7 +25,7 @@ from ..frequency.noise import signal_noise_variances
 from ..metrics import to_db
 from ..utils.validation import is_periodic
 from .levenberg_marquardt import levenberg_marquardt
-from .model_base import MAX_STEADY_PERIODS, DivergenceError
+from .model_base import MAX_STEADY_PERIODS, RUNAWAY_FACTOR, DivergenceError
 from .objective import SimulationError
 from .segments import make_segments, transient_length
 
@@ -501,7 +501,7 @@ def _sane_on_new_inputs(order, bounded_model, new_inputs, training_periods=(), c
         ("n_runaway", new_inputs,
          lambda model, inputs, verdict: model.runaways_in_turn(inputs, stop_at_first=verdict)),
         ("runaway_records", check_records,
-         lambda model, inputs, verdict: (i for i in range(len(inputs)) if record_run(model, i)[1] > 1.0)),
+         lambda model, inputs, verdict: (i for i in range(len(inputs)) if record_run(model, i)[1] > RUNAWAY_FACTOR)),
         ("n_unsettled", training_periods,
          lambda model, inputs, verdict: (i for i, U in enumerate(inputs) if not model.settles(U))),
         ("worse_records", check_outputs,

@@ -22,6 +22,10 @@ __all__ = ["Segment", "StateSpaceModel", "unbounded"]
 # Periods simulated at most in search of a periodic steady state.
 MAX_STEADY_PERIODS = 200
 
+# How far past its trusted range (in range widths) a simulation may take the
+# nonlinearity's variables before the model counts as running away.
+RUNAWAY_FACTOR = 1.0
+
 # The records new inputs are dealt to and each simulated in turn (see
 # StateSpaceModel.runaways_in_turn): a PNLSS model simulates them side by
 # side, one sample of all of them at a time, in loops the compiler
@@ -279,7 +283,7 @@ class StateSpaceModel:
         excess = excess[np.isfinite(hi - lo)]
         return float(max(excess.max(), 0.0)) if excess.size else 0.0
 
-    def runaways_in_turn(self, inputs, factor=1.0, stop_at_first=False):
+    def runaways_in_turn(self, inputs, factor=RUNAWAY_FACTOR, stop_at_first=False):
         """The places in ``inputs`` (of one length) the model runs away on
         (see :meth:`runs_away`), each simulated from the state the input
         before it in its record left: the inputs are dealt to
@@ -324,7 +328,7 @@ class StateSpaceModel:
                     return
                 x = np.zeros(self.n_states) if out[i] > factor else x_end
 
-    def runs_away(self, U, period=None, factor=1.0, max_periods=MAX_STEADY_PERIODS):
+    def runs_away(self, U, period=None, factor=RUNAWAY_FACTOR, max_periods=MAX_STEADY_PERIODS):
         """Whether the simulation of ``U`` diverges, or takes the
         nonlinearity's variables past their trusted range by more than
         ``factor`` times its width: a bounded model then sits on an orbit it

@@ -70,11 +70,12 @@ def random_phase_inputs(X_list, period, n_inputs=N_NEW_INPUTS, random_state=None
     new[:, 0] = spectra[of_period, 0]
     if period % 2 == 0:
         new[:, -1] = spectra[of_period, -1]  # the Nyquist bin of a real signal is real
-    mean = new[:, :1].real / period
+    period_mean = spectra[:, :1].real / period  # the DC bin each realisation keeps
+    mean = period_mean[of_period]
     varying = np.fft.irfft(new, period, axis=1) - mean
     peak = np.max(np.abs(varying), axis=1, keepdims=True)
     # each training period's own peak about its mean, the bound of its realisations
-    allowed = np.max(np.abs(stacked - spectra[:, :1].real / period), axis=1, keepdims=True)[of_period]
+    allowed = np.max(np.abs(stacked - period_mean), axis=1, keepdims=True)[of_period]
     scale = np.minimum(1.0, allowed / np.where(peak > 0, peak, 1.0))
     return tuple(mean + varying * scale)
 
