@@ -234,6 +234,35 @@ def test_cpd_reproducible_and_backend_untouched():
     assert tl.get_backend() == backend
 
 
+def test_cpd_repeated_call_is_the_first_result_and_moves_the_random_state_alike(monkeypatch):
+    # A grid over the branch degree decomposes the same tensor from the same
+    # seeds once per degree: ALS runs once, and the answer is the one a fresh
+    # run gives, the caller's RandomState ending where a fresh run leaves it.
+    from sklearn_pnlss.decoupling import cpd
+
+    runs = []
+    als = cpd._alternating_least_squares
+    monkeypatch.setattr(cpd, "_alternating_least_squares", lambda *args: runs.append(1) or als(*args))
+    J = np.random.default_rng(41).normal(size=(N_OUT, N_VARS, 40))  # no exact CPD: ALS runs its sweeps
+    first_state, again_state = np.random.RandomState(3), np.random.RandomState(3)
+    first = decompose_jacobian(J, 2, random_state=first_state)
+    first.W[:] = 0.0  # a caller writing into its factors changes nothing for the next
+    again = decompose_jacobian(J, 2, random_state=again_state)
+    by_int = decompose_jacobian(J, 2, random_state=3)  # tensorly's RandomState(3), the same start
+    assert len(runs) == 1
+    fresh_state = np.random.RandomState(3)
+    fresh = als(J, 2, 2000, 1e-10, fresh_state)
+    fresh_by_int = als(J, 2, 2000, 1e-10, 3)
+    for kept in (again, by_int, fresh_by_int):
+        for x, y in zip(kept, fresh, strict=True):
+            np.testing.assert_array_equal(x, y)
+    assert fresh.error > 1e-3  # a result ALS had to work for
+    assert again_state.randint(2**31) == first_state.randint(2**31) == fresh_state.randint(2**31)
+    decompose_jacobian(J, 2, random_state=None)
+    decompose_jacobian(J, 3, random_state=3)
+    assert len(runs) == 3  # no fixed start, or another rank: run anew
+
+
 # --- branches ------------------------------------------------------------------
 
 
