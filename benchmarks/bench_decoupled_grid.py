@@ -93,8 +93,10 @@ def main(argv=None):
             ("dec", DecoupledPNLSSRegressor(3, period=P, n_init=args.n_init, n_jobs=1, max_iter=args.max_iter,
                                             random_state=0)),
         ], memory=cache)
-        grid = [{"dec__n_branches": [r], "dec__degree": degrees} for r in args.branches
-                if (degrees := [d for d in args.degrees if _within(r, d, args.max_params)])]
+        # The largest models first: the two workers then end together on
+        # small ones, instead of one waiting out the last large fit.
+        grid = [{"dec__n_branches": [r], "dec__degree": degrees} for r in sorted(args.branches, reverse=True)
+                if (degrees := sorted((d for d in args.degrees if _within(r, d, args.max_params)), reverse=True))]
         search = GridSearchCV(pipe, grid, cv=cv, scoring=scoring, refit=False, n_jobs=args.n_jobs,
                               error_score=np.nan)
         t0 = time.perf_counter()
@@ -111,6 +113,7 @@ def main(argv=None):
         rows.append({"n_branches": r, "degree": d, "n_nonlinear_params": _n_nonlinear(r, d),
                      "db_multisine": float(ms[i]), "db_sweep": float(sw[i]),
                      "db_worse_signal": float(worst[i]), "fit_s": float(res["mean_fit_time"][i])})
+    rows.sort(key=lambda x: (x["n_branches"], x["degree"]))
     full_ms = -full.score(official.X_test_multisine, official.y_test_multisine)
     full_sw = -full.score(official.X_test_sweep, official.y_test_sweep)
 
