@@ -12,13 +12,23 @@ models, the number of nonlinear parameters, and the wall time.
     python benchmarks/bench_decoupled_grid.py [--n-jobs 2] [--n-init 5]
         [--branches 1 2 3 4 5 6] [--degrees 2 ... 11] [--max-params P]
         [--seed 0] [--max-iter 100] [--data-dir DIR] [--output FILE]
+        [--baseline CHECKOUT [--baseline-rounds 1]]
 
 ``--seed`` draws other training data (``make_bouc_wen``'s ``random_state``,
 same sizes): a selection that reaches a figure on one draw only has not
 reached it. ``--max-params`` leaves out the candidates with more nonlinear
-parameters. Results go to ``benchmarks/results/decoupled_grid.json``.
+parameters. ``--baseline`` (a checkout of an earlier commit) runs that
+commit's own grid script with the same settings just before this one's,
+``--baseline-rounds`` times (this checkout's grid in a fresh interpreter
+for all rounds but the last, whose is the run reported here): the machine's
+speed drifts by tens of per cent from day to day, so only such pairs can
+compare two commits. Results go to ``benchmarks/results/decoupled_grid.json``.
 """
 import argparse
+import json
+import os
+import statistics
+import subprocess
 import sys
 import tempfile
 import time
@@ -56,6 +66,41 @@ def _within(r, d, max_params):
     return max_params is None or _n_nonlinear(r, d) <= max_params
 
 
+def _grid_of(checkout, args):
+    """Wall time of ``checkout``'s own grid script with this run's settings,
+    in a fresh interpreter run from that checkout."""
+    settings = ["--n-jobs", args.n_jobs, "--n-init", args.n_init, "--branches", *args.branches, "--degrees",
+                *args.degrees, "--seed", args.seed, "--max-iter", args.max_iter,
+                "--data-dir", Path(args.data_dir).resolve()]
+    if args.max_params is not None:
+        settings += ["--max-params", args.max_params]
+    with tempfile.TemporaryDirectory() as tmp:
+        output = Path(tmp) / "grid.json"
+        subprocess.run([sys.executable, "benchmarks/bench_decoupled_grid.py", *map(str, settings), "--output",
+                        str(output)], env=dict(os.environ, PYTHONPATH=str(checkout)), cwd=checkout, check=True,
+                       capture_output=True)
+        return json.loads(output.read_text())["grid_time_s"]
+
+
+def _commit(checkout):
+    return subprocess.run(["git", "-C", str(checkout), "rev-parse", "--short", "HEAD"], capture_output=True,
+                          text=True).stdout.strip()
+
+
+def _paired(baseline, baseline_s, ours_s):
+    """The side by side's rounds (the last paired with this run) and the
+    median of their ratios."""
+    rounds = [{"baseline_s": b, "ours_s": o} for b, o in zip(baseline_s, ours_s, strict=True)]
+    ratio = statistics.median(r["ours_s"] / r["baseline_s"] for r in rounds)
+    commit = _commit(baseline)
+    for k, r in enumerate(rounds):
+        print(f"side by side, round {k + 1}: baseline {commit} {r['baseline_s']:.0f} s, "
+              f"this checkout {r['ours_s']:.0f} s")
+    print(f"ratio (median of the rounds): {ratio:.2f}")
+    return {"baseline_commit": commit, "commit": _commit(Path(__file__).resolve().parents[1]), "rounds": rounds,
+            "ratio_median": ratio}
+
+
 def main(argv=None):
     from sklearn.model_selection import GridSearchCV
     from sklearn.pipeline import Pipeline
@@ -74,7 +119,16 @@ def main(argv=None):
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--max-iter", type=int, default=100)
     parser.add_argument("--output", default=str(DEFAULT_OUTPUT))
+    parser.add_argument("--baseline", help="checkout of an earlier commit whose grid runs just before this one's")
+    parser.add_argument("--baseline-rounds", type=int, default=1)
     args = parser.parse_args(argv)
+
+    here = Path(__file__).resolve().parents[1]
+    baseline_s, ours_s = [], []
+    for k in range(args.baseline_rounds if args.baseline else 0):
+        baseline_s.append(_grid_of(args.baseline, args))
+        if k < args.baseline_rounds - 1:
+            ours_s.append(_grid_of(here, args)[0])
 
     t_start = time.perf_counter()
     data = make_bouc_wen(n_realizations=3, n_periods=2, rms=55.0, random_state=args.seed)
@@ -104,6 +158,7 @@ def main(argv=None):
             warnings.simplefilter("ignore")  # failed fits are counted below
             search.fit(X, y, dec__X_val=X_val, dec__y_val=y_val)
         t_grid = time.perf_counter() - t0
+        ours_s.append(t_grid)
         full = PNLSSRegressor(3, degrees=(2, 3), variables="states_inputs", period=P, max_iter=200).fit(X_train, y_train)
     res = search.cv_results_
     ms, sw, worst = -res["mean_test_multisine"], -res["mean_test_sweep"], -res["mean_test_worst"]
@@ -148,6 +203,7 @@ def main(argv=None):
                   f"nonlinear parameters: {row['db_multisine']:.2f} / {row['db_sweep']:.2f} dB")
     print(f"{len(beats)} decoupled models beat the full PNLSS on both test signals; "
           f"{len(rows) - len(finite)} diverged on a test signal")
+    side_by_side = _paired(args.baseline, baseline_s, ours_s) if args.baseline else None
     results = header()
     results.update({
         "n_jobs": args.n_jobs, "n_init": args.n_init, "n_train_signals": n_train, "grid_time_s": t_grid,
@@ -155,6 +211,7 @@ def main(argv=None):
         "full_pnlss": {"db_multisine": full_ms, "db_sweep": full_sw, "n_nonlinear_params": 90},
         "models": rows, "best": best, f"best_within_{SMALL}": best_small,
         f"best_within_{SMALL}_worse_signal": best_small_worst, "n_beating_full": len(beats),
+        "baseline": side_by_side,
     })
     write_results(results, args.output)
 
