@@ -128,7 +128,7 @@ def main(argv=None):
     for k in range(args.baseline_rounds if args.baseline else 0):
         baseline_s.append(_grid_of(args.baseline, args))
         if k < args.baseline_rounds - 1:
-            ours_s.append(_grid_of(here, args)[0])
+            ours_s.append(_grid_of(here, args))
 
     t_start = time.perf_counter()
     data = make_bouc_wen(n_realizations=3, n_periods=2, rms=55.0, random_state=args.seed)
