@@ -295,6 +295,7 @@ def _state_array(random_state):
 
 
 def _state_tuple(state):
+    """The ``RandomState.set_state`` tuple of a :func:`_state_array`."""
     return "MT19937", state[:-3].astype(np.uint32), int(state[-3]), int(state[-2]), float(state[-1])
 
 

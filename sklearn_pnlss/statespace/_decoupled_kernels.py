@@ -265,7 +265,9 @@ def _carry_fused(M, S, out):
     ``np.dot`` it replaces, without a library call per sample. Not inlined
     in the kernel: ``contract`` (fusing allowed) must stay on these sums
     alone. The first term is added to a zero so that the sum's first
-    fusion is with it, and the order holds."""
+    fusion is with it, and the order holds. The passes of
+    :func:`_combine_rows`, written on the matrix: through it, row by row
+    (the same bits), the Jacobian took 5 % longer."""
     n, w = M.shape[1], S.shape[1]
     for i in range(M.shape[0]):
         k = 0
