@@ -251,9 +251,11 @@ def _combine_rows(c, S, q0, q1, out, o0):
 
 
 # States up to which _carry_fused takes the sensitivities through the local
-# linear map (BLAS above: it blocks the sum over the states differently
-# from 18 states on, and runs the large products faster).
-_FUSED_STATES = 10
+# linear map: 33 against 60 ns at 2 states, 45 against 94 at 3, as fast at 4
+# (a decoupled model's columns, three branches of degree 7); BLAS above, 1.2
+# to 1.9 times faster from 5 to 10 states (the same bits up to 10 here; from
+# 18 on, BLAS blocks the sum over the states differently).
+_FUSED_STATES = 4
 
 
 @numba.njit(cache=True, nogil=True, fastmath={"contract"})
@@ -262,12 +264,12 @@ def _carry_fused(M, S, out):
     fused into the sum (one rounding a term), ``fma(M[i, 2], S[2, q],
     fma(M[i, 1], S[1, q], 0.0 + M[i, 0] S[0, q]))``: the arithmetic of
     OpenBLAS's dgemm kernel at these sizes, so the same bits as the
-    ``np.dot`` it replaces, without a library call per sample. Not inlined
-    in the kernel: ``contract`` (fusing allowed) must stay on these sums
-    alone. The first term is added to a zero so that the sum's first
-    fusion is with it, and the order holds. The passes of
-    :func:`_combine_rows`, written on the matrix: through it, row by row
-    (the same bits), the Jacobian took 5 % longer."""
+    ``np.dot`` it replaces (checked from 2 to 10 states), without a library
+    call per sample. Not inlined in the kernel: ``contract`` (fusing
+    allowed) must stay on these sums alone. The first term is added to a
+    zero so that the sum's first fusion is with it, and the order holds.
+    The passes of :func:`_combine_rows`, written on the matrix: through it,
+    row by row (the same bits), the Jacobian took 5 % longer."""
     n, w = M.shape[1], S.shape[1]
     for i in range(M.shape[0]):
         k = 0
@@ -383,9 +385,9 @@ def decoupled_jacobian(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, signed, knots, 
                         row[oWy + a * r + b] = g[b]
         # Sensitivity of the next state: the propagated part, a product BLAS
         # does at three times the rate of a compiled loop at 18 states and
-        # 450 columns (5.7 against 17 us a sample) and that costs a library
-        # call a sample at a few states, then the direct dependence of row i
-        # on the parameters.
+        # 450 columns (5.7 against 17 us a sample) but that costs more in its
+        # call than in its sums at a few states, then the direct dependence of
+        # row i on the parameters.
         if n <= _FUSED_STATES:
             _carry_fused(Ax, S, S_next)
         else:
