@@ -224,30 +224,30 @@ def _branch_direct(w, dg, s, zp, oV, oG, row):
 
 
 @_jit
-def _combine_rows(c, S, q0, q1, out, o0):
-    """out[o0 + q - q0] = sum_k c[k] S[k, q] for q0 <= q < q1, summed over k
-    as a plain loop from zero sums it, ``0.0 + c[0] S[0, q] + c[1] S[1, q]
-    + ...``, but three terms a pass over the row (then two a pass), not a
-    pass per term that loads and stores the row again."""
-    n = c.shape[0]
+def _combine_rows(c, S, out):
+    """out = sum_k c[k] S[k], summed over k as a plain loop from zero sums
+    it, ``0.0 + c[0] S[0, q] + c[1] S[1, q] + ...``, but three terms a pass
+    over the row (then two a pass), not a pass per term that loads and
+    stores the row again."""
+    n, w = c.shape[0], S.shape[1]
     k = 0
     if n >= 3:
         c0, c1, c2 = c[0], c[1], c[2]
-        for q in range(q0, q1):
-            out[o0 + q - q0] = ((0.0 + c0 * S[0, q]) + c1 * S[1, q]) + c2 * S[2, q]
+        for q in range(w):
+            out[q] = ((0.0 + c0 * S[0, q]) + c1 * S[1, q]) + c2 * S[2, q]
         k = 3
     else:
-        for q in range(q0, q1):
-            out[o0 + q - q0] = 0.0
+        for q in range(w):
+            out[q] = 0.0
     while k + 2 <= n:
         c0, c1 = c[k], c[k + 1]
-        for q in range(q0, q1):
-            out[o0 + q - q0] = (out[o0 + q - q0] + c0 * S[k, q]) + c1 * S[k + 1, q]
+        for q in range(w):
+            out[q] = (out[q] + c0 * S[k, q]) + c1 * S[k + 1, q]
         k += 2
     if k < n:
         c0 = c[k]
-        for q in range(q0, q1):
-            out[o0 + q - q0] += c0 * S[k, q]
+        for q in range(w):
+            out[q] += c0 * S[k, q]
 
 
 # States up to which _carry_fused takes the sensitivities through the local
@@ -371,10 +371,10 @@ def decoupled_jacobian(A, B, C, D, Wx, Wy, V, G, lo, hi, linear, signed, knots, 
             Jt = J[t - n_skip]
             for a in range(p):
                 row = Jt[a]
-                _combine_rows(Cx[a], S, 0, n_sx, row, 0)
+                _combine_rows(Cx[a], S[:, :n_sx], row[:n_sx])
                 for q in range(n_sx, n_par):
                     row[q] = 0.0
-                _combine_rows(Cx[a], S, n_sx, n_cols, row, n_par)  # the start-state columns
+                _combine_rows(Cx[a], S[:, n_sx:], row[n_par:])  # the start-state columns
                 _branch_direct(Wy[a], dg, s, zp, oV, oG, row)
                 for k in range(n):
                     row[oC + a * n + k] = x_now[k]
