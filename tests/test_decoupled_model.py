@@ -322,3 +322,28 @@ def test_signed_powers_simulate_the_odd_branches():
     with pytest.raises(ValueError, match="signed powers are a polynomial basis"):
         DecoupledModel(**{**{k: getattr(model, k) for k in "A B C D Wx Wy V".split()},
                           "G": np.zeros((2, 5)), "knots": np.ones((2, 2)), "signed": True})
+
+
+@pytest.mark.parametrize("linear, signed", [(False, False), (True, False), (True, True)])
+def test_simulation_continues_the_branches_past_their_range(linear, signed):
+    """Past its trusted range a branch is held at its edge value, or
+    continued along its edge tangent: the kernel's simulation (which
+    computes a branch's derivative only there) equals a plain loop over the
+    samples with ``evaluate_branches``, and the range is left often."""
+    from dataclasses import replace
+
+    rng = np.random.default_rng(11)
+    model = _random_model(rng, n=3, m=1, p=2, r=3, d=5, output_branches=True, signed=signed)
+    U = 0.8 * rng.standard_normal((400, 1))
+    inside = model.simulate_states(0.5 * U)
+    model = replace(model.with_trusted_range(np.hstack([inside, 0.5 * U])), linear_extrapolation=linear)
+    x, Y_ref, left = np.zeros(3), [], 0
+    for u in U:
+        z = np.concatenate([x, u]) @ model.V
+        left += bool(np.any((z < model.bounds[:, 0]) | (z > model.bounds[:, 1])))
+        g = evaluate_branches(model.G, z[None], model.bounds, linear, signed=signed)[0]
+        Y_ref.append(model.C @ x + model.D @ u + model.Wy @ g)
+        x = model.A @ x + model.B @ u + model.Wx @ g
+    Y, _ = model.simulate(U)
+    assert left > 100  # the continuation is what is tested
+    np.testing.assert_allclose(Y, np.array(Y_ref), rtol=1e-12, atol=1e-12)
