@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _bench_utils import DEFAULT_DATA, RESULTS, header, write_results  # noqa: E402
+from _bench_utils import DEFAULT_DATA, REPO, RESULTS, header, write_results  # noqa: E402
 
 DEFAULT_OUTPUT = RESULTS / "decoupled_grid.json"
 # Issue 15's size target: a decoupled model of at most this many nonlinear
@@ -97,8 +97,7 @@ def _paired(baseline, baseline_s, ours_s):
         print(f"side by side, round {k + 1}: baseline {commit} {r['baseline_s']:.0f} s, "
               f"this checkout {r['ours_s']:.0f} s")
     print(f"ratio (median of the rounds): {ratio:.2f}")
-    return {"baseline_commit": commit, "commit": _commit(Path(__file__).resolve().parents[1]), "rounds": rounds,
-            "ratio_median": ratio}
+    return {"baseline_commit": commit, "commit": _commit(REPO), "rounds": rounds, "ratio_median": ratio}
 
 
 def main(argv=None):
@@ -123,12 +122,11 @@ def main(argv=None):
     parser.add_argument("--baseline-rounds", type=int, default=1)
     args = parser.parse_args(argv)
 
-    here = Path(__file__).resolve().parents[1]
     baseline_s, ours_s = [], []
     for k in range(args.baseline_rounds if args.baseline else 0):
         baseline_s.append(_grid_of(args.baseline, args))
         if k < args.baseline_rounds - 1:
-            ours_s.append(_grid_of(here, args))
+            ours_s.append(_grid_of(REPO, args))
 
     t_start = time.perf_counter()
     data = make_bouc_wen(n_realizations=3, n_periods=2, rms=55.0, random_state=args.seed)

@@ -32,7 +32,6 @@ def test_jacobian_is_exact():
     assert np.abs(J - J_fd).max() < 1e-7 * np.abs(J).max()
 
 
-
 def test_jacobian_is_exact_past_the_written_out_factors_and_rows():
     """Five states, two inputs and outputs, degree 4 over all seven
     variables: monomials of four factors and linear maps of five rows run
@@ -51,6 +50,7 @@ def test_jacobian_is_exact_past_the_written_out_factors_and_rows():
     J = model.jacobian(seg)
     J_fd = finite_difference_jacobian(model, seg)
     assert np.abs(J - J_fd).max() < 1e-7 * np.abs(J).max()
+
 
 @pytest.mark.parametrize(
     "degrees, variables, n_params, n_nonlinear",
