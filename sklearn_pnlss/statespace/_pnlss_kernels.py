@@ -329,6 +329,23 @@ def pnlss_simulate(A, B, C, D, E, F, exE, exF, lo, hi, U, x0):
 
 
 @_jit
+def _copy_run(src, dst):
+    """dst[:] = src, through views that start at the runs: indexed from an
+    offset (``J[t, a, c0 + q]``), each entry went through numba's
+    negative-index test and the copy was not vectorised."""
+    for q in range(src.shape[0]):
+        dst[q] = src[q]
+
+
+@_jit
+def _add_run(src, dst):
+    """dst += src, through views that start at the runs (see
+    :func:`_copy_run`)."""
+    for q in range(src.shape[0]):
+        dst[q] += src[q]
+
+
+@_jit
 def _direct_columns(n, m, nE, c0, c1):
     """Where row i of the state's sensitivities takes its direct term from
     the term v of ``[x; u; zeta]``: the column, counted from ``c0``, of the
@@ -411,6 +428,7 @@ def pnlss_jacobian(A, B, C, D, E, F, exE, exF, lo, hi, U, x, x_end, Sx, n_skip, 
     work = np.empty((n, max(Et.shape[1], Ft.shape[1])))
     n_own = max(0, min(w, n_sx - c0))  # the span's columns of parameters, then of the start state
     direct = _direct_columns(n, m, nE, c0, c1)
+    whole, nv = c0 == 0 and c1 >= n_sx, n + m  # the span holds every parameter that moves the state
     x_now = x.copy()
     x_next = np.empty(n)
     for t in range(N):
@@ -431,29 +449,31 @@ def pnlss_jacobian(A, B, C, D, E, F, exE, exF, lo, hi, U, x, x_end, Sx, n_skip, 
             _carry(M, S, P_next)
             Jt = J[t - n_skip]
             for a in range(p):
-                Jx = P_next[n + a]
-                for q in range(n_own):
-                    Jt[a, c0 + q] = Jx[q]
-                for q in range(n_own, w):
-                    Jt[a, n_par + c0 + q - n_sx] = Jx[q]
+                Jx, Ja = P_next[n + a], Jt[a]
+                _copy_run(Jx[:n_own], Ja[c0 : c0 + n_own])
+                _copy_run(Jx[n_own:w], Ja[n_par + c0 + n_own - n_sx : n_par + c0 + w - n_sx])
                 if c0 == 0:
-                    for q in range(n_sx, n_par):
-                        Jt[a, q] = 0.0
-                    for k in range(n):
-                        Jt[a, oC + a * n + k] = x_now[k]
-                    for k in range(m):
-                        Jt[a, oD + a * m + k] = u[k]
-                    for k in range(nF):
-                        Jt[a, oF + a * nF + k] = eta[k]
+                    Ja[n_sx:n_par] = 0.0
+                    _copy_run(x_now, Ja[oC + a * n : oC + (a + 1) * n])
+                    _copy_run(u, Ja[oD + a * m : oD + (a + 1) * m])
+                    _copy_run(eta, Ja[oF + a * nF : oF + (a + 1) * nF])
         else:
             _carry(Ax, S, P_next[:n])
         # Sensitivity of the next state: the propagated part, then the
-        # direct dependence of row i on its own parameters.
-        for i in range(n):
-            for v in range(T.shape[0]):
-                c = direct[i, v]
-                if c >= 0:
-                    P_next[i, c] += T[v]
+        # direct dependence of row i on its own parameters: three runs of
+        # the row when the span holds them all, else through the table.
+        if whole:
+            for i in range(n):
+                row = P_next[i]
+                _add_run(T[:n], row[i * n : (i + 1) * n])
+                _add_run(T[n:nv], row[n * n + i * m : n * n + (i + 1) * m])
+                _add_run(zeta, row[n * nv + i * nE : n * nv + (i + 1) * nE])
+        else:
+            for i in range(n):
+                for v in range(T.shape[0]):
+                    c = direct[i, v]
+                    if c >= 0:
+                        P_next[i, c] += T[v]
         P, P_next = P_next, P
         _affine(A, x_now, B, u, E, zeta, x_next)
         x_now, x_next = x_next, x_now

@@ -209,8 +209,8 @@ class DecoupledModel(StateSpaceModel):
         """
         if self.splines:
             return None
-        z = self.bounded_variables(np.asarray(states_inputs, dtype=float))
-        reach = np.abs(z).max(axis=0)
+        z = np.ascontiguousarray(self.bounded_variables(np.asarray(states_inputs, dtype=float)).T)
+        reach = np.abs(z).max(axis=1)  # a branch a row: see StateSpaceModel._excursion
         reach[~(reach > 0)] = 1.0
         basis = np.eye(self.n_params)
         start = sum(getattr(self, name).size for name in self._block_names[: self._block_names.index("G")])

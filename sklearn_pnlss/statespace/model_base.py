@@ -156,8 +156,9 @@ class StateSpaceModel:
         variables at the points ``states_inputs`` (rows ``[x; u]``, e.g. a
         simulation of the training inputs), widened by ``margin`` times the
         range's width on each side."""
-        v = self.bounded_variables(np.asarray(states_inputs, dtype=float))
-        lo, hi = v.min(axis=0), v.max(axis=0)
+        # a variable a row: see _excursion
+        v = np.ascontiguousarray(self.bounded_variables(np.asarray(states_inputs, dtype=float)).T)
+        lo, hi = v.min(axis=1), v.max(axis=1)
         pad = margin * (hi - lo)
         return replace(self, bounds=np.column_stack([lo - pad, hi + pad]))
 
@@ -274,8 +275,9 @@ class StateSpaceModel:
 
     def _excursion(self, states_inputs):
         """:meth:`range_excursion` along the rows ``[x; u]`` given."""
-        # a variable a row: numpy reduces a few long rows some ten times
-        # faster than the columns of a tall array (0.02 ms against 0.2 ms)
+        # a variable a row: numpy reduces a few long rows ten to thirty times
+        # faster than the columns of a tall array (16,384 points of three
+        # variables: 0.03 against 0.85 ms for their minima and maxima)
         v = np.ascontiguousarray(self.bounded_variables(states_inputs).T)
         lo, hi = self.bounds[:, 0], self.bounds[:, 1]
         with np.errstate(invalid="ignore"):  # inf / inf without bounds
