@@ -1791,7 +1791,7 @@ FIGURES = [
     Figure(R, "It has 51 nonlinear parameters where the full model in the states and input has 90 "
               "(the states-only model above: 48)", "the models' structure",
            lambda: [_n_decoupled(3, 10), _n_nonlinear("states_inputs", (2, 3)), _n_nonlinear("states", (2, 3))]),
-    Figure(R, "(300 fits) through `GridSearchCV` in 272 s on 2 cores", GRID,
+    Figure(R, "(300 fits) through `GridSearchCV` in 239 s on 2 cores", GRID,
            lambda: [len(_results("decoupled_grid")["models"]) * _results("decoupled_grid")["n_init"],
                     _results("decoupled_grid")["grid_time_s"], _results("decoupled_grid")["n_jobs"]]),
     Figure(R, "amplified 1.2 times", "statespace.fitting.AMPLIFIED_VALIDATION",
