@@ -11,10 +11,17 @@ calls each, their minimum and median. ``--baseline CHECKOUT`` times the same
 pickled models with that checkout's code (its kernels) in turn with this
 one's, ``--baseline-rounds`` rounds, and gives each kernel's median ratio of
 the paired minima: the machine's speed drifts from hour to hour, a pair
-does not. Results go to ``benchmarks/results/kernels.json``.
+does not. ``--fit-profile`` adds where one fit of the seed paper's grid
+goes (``--fit-profile-model``, 6 branches of degree 11 by default: five
+starts of 100 iterations from the states-and-input (2, 3) PNLSS, one BLAS
+thread, as a grid worker runs it), by cProfile: the Jacobian kernel, the
+normal equations (J^T J, J^T e and the start-state products), the
+simulation kernel, the runaway checks, the step's eigendecomposition and
+the rest. Results go to ``benchmarks/results/kernels.json``.
 
     python benchmarks/bench_kernels.py [--repeat 41] [--baseline CHECKOUT
-        [--baseline-rounds 3]] [--output FILE]
+        [--baseline-rounds 3]] [--fit-profile [--fit-profile-model 6 11]]
+        [--output FILE]
 """
 import argparse
 import json
@@ -92,6 +99,53 @@ def measure(models_path, repeat):
     return out
 
 
+# cProfile entries summed into each part of a fit (their own time; the
+# runaway checks' with what they call)
+FIT_PARTS = {"jacobian kernel": ("decoupled_jacobian", False), "normal equations": ("chunk_sums", False),
+             "simulation kernel": ("decoupled_simulate", False), "runaway checks": ("runs_away", True),
+             "eigendecomposition": ("eigh", False)}
+
+
+def fit_profile(n_branches, degree):
+    """Seconds of one grid fit (five starts, 100 iterations, validation on
+    a third realisation, one BLAS thread) by part, from cProfile."""
+    import cProfile
+    import pstats
+
+    from sklearn.pipeline import Pipeline
+    from threadpoolctl import threadpool_limits
+
+    from sklearn_pnlss import DecoupledPNLSSRegressor, PNLSSRegressor
+    from sklearn_pnlss.datasets import make_bouc_wen
+
+    data = make_bouc_wen(n_realizations=3, n_periods=2, rms=55.0, random_state=0)
+    X, y = data.X_train[:2], data.y_train[:2]
+    X_val, y_val = data.X_train[2:, PERIOD:], data.y_train[2:, PERIOD:]
+    with warnings.catch_warnings(), threadpool_limits(1):
+        warnings.simplefilter("ignore")
+        start = PNLSSRegressor(3, degrees=(2, 3), variables="states_inputs", period=PERIOD, max_iter=200).fit(X, y)
+
+        def fit(d):
+            Pipeline([("pnlss", start), ("dec", DecoupledPNLSSRegressor(
+                3, n_branches=n_branches, degree=d, period=PERIOD, n_init=5, n_jobs=1, max_iter=100,
+                random_state=0))]).fit(X, y, dec__X_val=X_val, dec__y_val=y_val)
+
+        fit(degree - 1)  # kernels compiled and the CPD of this branch count kept, as in the grid
+        profile = cProfile.Profile()
+        t0 = time.perf_counter()
+        profile.enable()
+        fit(degree)
+        profile.disable()
+        total = time.perf_counter() - t0
+    parts = dict.fromkeys(FIT_PARTS, 0.0)
+    for (_, _, name), (_, _, own, cumulative, _) in pstats.Stats(profile).stats.items():
+        for part, (function, with_callees) in FIT_PARTS.items():
+            if name == function:
+                parts[part] += cumulative if with_callees else own
+    parts["rest"] = total - sum(parts.values())
+    return {"n_branches": n_branches, "degree": degree, "fit_s": total, "parts_s": parts}
+
+
 def measure_in(checkout, models_path, repeat):
     """:func:`measure` in a fresh interpreter importing ``checkout``'s code."""
     with tempfile.TemporaryDirectory() as tmp:
@@ -108,6 +162,8 @@ def main(argv=None):
     parser.add_argument("--baseline", help="checkout of an earlier commit whose kernels are timed in turn")
     parser.add_argument("--baseline-rounds", type=int, default=3)
     parser.add_argument("--output", default=str(DEFAULT_OUTPUT))
+    parser.add_argument("--fit-profile", action="store_true", help="where one grid fit's time goes")
+    parser.add_argument("--fit-profile-model", type=int, nargs=2, default=[6, 11], metavar=("BRANCHES", "DEGREE"))
     parser.add_argument("--measure", help=argparse.SUPPRESS)  # internal: time the pickled models, write JSON
     args = parser.parse_args(argv)
     if args.measure:
@@ -138,9 +194,14 @@ def main(argv=None):
                 line += f"  (baseline {row[kind]['baseline_min_ns_per_sample']:8.1f}, ratio {ratio:.2f})"
             print(line)
         table[label] = row
+    profile = fit_profile(*args.fit_profile_model) if args.fit_profile else None
+    if profile:
+        print(f"one grid fit, {profile['n_branches']} branches of degree {profile['degree']}: "
+              f"{profile['fit_s']:.1f} s = " + ", ".join(f"{k} {v:.1f}" for k, v in profile["parts_s"].items()))
     commit = subprocess.run(["git", "-C", str(REPO), "rev-parse", "--short", "HEAD"], capture_output=True,
                             text=True).stdout.strip()
     results.update({"commit": commit, "period": PERIOD, "repeat": args.repeat, "kernels": table, "rounds": rounds,
+                    "fit_profile": profile,
                     "baseline_commit": (subprocess.run(["git", "-C", args.baseline, "rev-parse", "--short", "HEAD"],
                                                        capture_output=True, text=True).stdout.strip()
                                         if args.baseline else None)})
