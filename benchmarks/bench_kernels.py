@@ -112,7 +112,6 @@ def fit_profile(n_branches, degree):
     import cProfile
     import pstats
 
-    from sklearn.pipeline import Pipeline
     from threadpoolctl import threadpool_limits
 
     from sklearn_pnlss import DecoupledPNLSSRegressor, PNLSSRegressor
@@ -125,10 +124,11 @@ def fit_profile(n_branches, degree):
         warnings.simplefilter("ignore")
         start = PNLSSRegressor(3, degrees=(2, 3), variables="states_inputs", period=PERIOD, max_iter=200).fit(X, y)
 
+        X_start = start.transform(X)  # the signals with the start attached, as the grid's cached stage gives them
+
         def fit(d):
-            Pipeline([("pnlss", start), ("dec", DecoupledPNLSSRegressor(
-                3, n_branches=n_branches, degree=d, period=PERIOD, n_init=5, n_jobs=1, max_iter=100,
-                random_state=0))]).fit(X, y, dec__X_val=X_val, dec__y_val=y_val)
+            DecoupledPNLSSRegressor(3, n_branches=n_branches, degree=d, period=PERIOD, n_init=5, n_jobs=1,
+                                    max_iter=100, random_state=0).fit(X_start, y, X_val=X_val, y_val=y_val)
 
         fit(degree - 1)  # kernels compiled and the CPD of this branch count kept, as in the grid
         profile = cProfile.Profile()
