@@ -209,8 +209,7 @@ class DecoupledModel(StateSpaceModel):
         """
         if self.splines:
             return None
-        z = np.ascontiguousarray(self.bounded_variables(np.asarray(states_inputs, dtype=float)).T)
-        reach = np.abs(z).max(axis=1)  # a branch a row: see StateSpaceModel._excursion
+        reach = np.abs(self._variables_by_row(states_inputs)).max(axis=1)  # a branch a row
         reach[~(reach > 0)] = 1.0
         basis = np.eye(self.n_params)
         start = sum(getattr(self, name).size for name in self._block_names[: self._block_names.index("G")])
