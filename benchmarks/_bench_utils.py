@@ -40,6 +40,12 @@ def header():
     }
 
 
+def commit_of(checkout=REPO):
+    """The short hash of ``checkout``'s HEAD."""
+    return subprocess.run(["git", "-C", str(checkout), "rev-parse", "--short", "HEAD"], capture_output=True,
+                          text=True).stdout.strip()
+
+
 def timeit(func, repeat):
     """Median and minimum wall time of ``repeat`` calls, and the last result."""
     times = []

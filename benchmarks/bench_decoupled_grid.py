@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _bench_utils import DEFAULT_DATA, REPO, RESULTS, header, write_results  # noqa: E402
+from _bench_utils import DEFAULT_DATA, REPO, RESULTS, commit_of, header, write_results  # noqa: E402
 
 DEFAULT_OUTPUT = RESULTS / "decoupled_grid.json"
 # Issue 15's size target: a decoupled model of at most this many nonlinear
@@ -82,22 +82,17 @@ def _grid_of(checkout, args):
         return json.loads(output.read_text())["grid_time_s"]
 
 
-def _commit(checkout):
-    return subprocess.run(["git", "-C", str(checkout), "rev-parse", "--short", "HEAD"], capture_output=True,
-                          text=True).stdout.strip()
-
-
 def _paired(baseline, baseline_s, ours_s):
     """The side by side's rounds (the last paired with this run) and the
     median of their ratios."""
     rounds = [{"baseline_s": b, "ours_s": o} for b, o in zip(baseline_s, ours_s, strict=True)]
     ratio = statistics.median(r["ours_s"] / r["baseline_s"] for r in rounds)
-    commit = _commit(baseline)
+    commit = commit_of(baseline)
     for k, r in enumerate(rounds):
         print(f"side by side, round {k + 1}: baseline {commit} {r['baseline_s']:.0f} s, "
               f"this checkout {r['ours_s']:.0f} s")
     print(f"ratio (median of the rounds): {ratio:.2f}")
-    return {"baseline_commit": commit, "commit": _commit(REPO), "rounds": rounds, "ratio_median": ratio}
+    return {"baseline_commit": commit, "commit": commit_of(), "rounds": rounds, "ratio_median": ratio}
 
 
 def main(argv=None):

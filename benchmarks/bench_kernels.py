@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _bench_utils import REPO, RESULTS, header, write_results  # noqa: E402
+from _bench_utils import REPO, RESULTS, commit_of, header, write_results  # noqa: E402
 
 DEFAULT_OUTPUT = RESULTS / "kernels.json"
 PERIOD = 8192
@@ -198,13 +198,9 @@ def main(argv=None):
     if profile:
         print(f"one grid fit, {profile['n_branches']} branches of degree {profile['degree']}: "
               f"{profile['fit_s']:.1f} s = " + ", ".join(f"{k} {v:.1f}" for k, v in profile["parts_s"].items()))
-    commit = subprocess.run(["git", "-C", str(REPO), "rev-parse", "--short", "HEAD"], capture_output=True,
-                            text=True).stdout.strip()
-    results.update({"commit": commit, "period": PERIOD, "repeat": args.repeat, "kernels": table, "rounds": rounds,
-                    "fit_profile": profile,
-                    "baseline_commit": (subprocess.run(["git", "-C", args.baseline, "rev-parse", "--short", "HEAD"],
-                                                       capture_output=True, text=True).stdout.strip()
-                                        if args.baseline else None)})
+    results.update({"commit": commit_of(), "period": PERIOD, "repeat": args.repeat, "kernels": table,
+                    "rounds": rounds, "fit_profile": profile,
+                    "baseline_commit": commit_of(args.baseline) if args.baseline else None})
     write_results(results, args.output)
 
 
