@@ -10,10 +10,11 @@ PNLSS iteration goes, beside the published figures.
         [--weighting relative|none]
         [--also-weighting noise ...] [--also-sweeps] [--cpd] [--no-pnlss]
         [--select [--select-states 18] [--select-draws 1 2]] [--above-band]
-        [--above-band-lead 0 25 50] [--output FILE]
+        [--above-band-lead 0 25 50] [--lru-draws 0 1] [--keep-rows] [--output FILE]
 
 The committed results: ``--decoupled 3:3 3:5 3:3:14 3:3:18 3:3:18@1 3:3:18@2
---select --select-draws 1 2 --above-band``.
+--select --select-draws 1 2 --above-band``, then ``--no-pnlss --decoupled
+--lru-draws 0 1 --keep-rows`` (the best model added to them).
 
 ``--select`` chooses the decoupled model's branch count (3 or 6) and
 branch shape (polynomials or cubic splines on 8 knots) without looking at
@@ -79,14 +80,24 @@ Cholesky factorisation per trial damping for this model), and the trial
 simulations; the arithmetic floor of
 J^T J at the BLAS rate measured on the same machine is printed beside it.
 
+``--lru-draws 0 1`` adds ``f16_lru.py``'s model of the protocol, the best
+model of the F-16 benchmarks: the mean of those draws' models, each the
+mean of two decoupled fits of 18 states (the estimation levels' sine sweeps
+their check records) with the mean of two networks of linear recurrent
+units above the band (``LRUAboveBandRegressor``, trained on the multisines
+and the sweeps); each draw's rows go under ``draws``. ``--keep-rows`` keeps
+what the output file holds that the run does not produce (rows of other
+names, with the other entries), so that a model is added to the results
+without refitting the others; every row carries the ``date`` of its run.
+
 Results go to ``benchmarks/results/f16.json``; its ``best`` entry holds
 ``model``, ``mean_nrmse`` (outputs and levels 2, 4, 6), ``nrmse`` (per
-level, per output), ``fit_s`` and ``peak_memory_mb`` of the best of its
-rows. The best model of the F-16 benchmarks (the hinges above the band,
-the mean of two draws) is ``f16_clearances.py``'s: the same fields under
-``best`` in ``results/f16_clearances.json``.
+level, per output), ``fit_s`` and ``peak_memory_mb`` of the row of lowest
+mean test NRMSE among those fitted in under ten minutes (the issue's
+budget).
 """
 import argparse
+import json
 import os
 import resource
 import sys
@@ -312,8 +323,9 @@ def best_within_budget(rows):
     if not within:
         return None
     best = min(within, key=lambda row: row["mean_nrmse"])
+    sweeps = f"sweeps {best['mean_nrmse_sweeps']:.3f}, " if "mean_nrmse_sweeps" in best else ""  # older rows: none
     print(f"best within {FIT_BUDGET_S:.0f} s: {best['model']['estimator']}, mean NRMSE {best['mean_nrmse']:.3f}, "
-          f"sweeps {best['mean_nrmse_sweeps']:.3f}, fit {best['fit_s']:.0f} s", flush=True)
+          f"{sweeps}fit {best['fit_s']:.0f} s", flush=True)
     return best
 
 
@@ -590,6 +602,45 @@ def select_decoupled(args, X, y, test):
     return chosen, draws, {"grid": scores, "search_s": search_s, "selected": {"n_branches": r, "n_knots": knots}}
 
 
+def lru_rows(args):
+    """``f16_lru.py``'s model of the protocol for ``args.lru_draws``: a row
+    for the mean of the draws' models (each the mean of two decoupled fits
+    with the mean of two networks above the band), and each draw's rows
+    (its model of the band alone, then with its networks)."""
+    import f16_lru  # it imports this script: loaded on demand
+
+    X, y, test, train_sweeps, start, start_s = f16_lru.load_and_start(args.data_dir)
+    draws, fitted = [], []
+    for seed in args.lru_draws:
+        rows, network = f16_lru.draw_rows(*f16_lru.averaged(seed), start, start_s, X, y, train_sweeps, test, seed)
+        for row in rows:  # a row is known by its name (--keep-rows), and the draws' names are alike
+            row["model"]["estimator"] += f", draw {seed}"
+        draws += rows
+        fitted.append(network)
+    # scored by f16_lru's instance of this module: the one its loader gave the test levels' sweeps
+    mean = f16_lru.bench_f16.entry(
+        f"mean of draws {list(args.lru_draws)}: LRUAboveBandRegressor", {"lru_draws": list(args.lru_draws)},
+        f16_lru.MeanOfMembers([model for model, _ in fitted]), test, start_s + sum(s for _, s in fitted))
+    return [mean], draws
+
+
+# The sections of the results that hold rows, each a model by its name.
+ROW_SECTIONS = ("models", "draws", "weightings", "with_sweeps")
+
+
+def with_kept_rows(earlier, results):
+    """``results`` with what ``earlier`` (the output file's content) holds
+    that this run did not produce: its rows of other names, in their
+    places (those of this run's names replaced, new names after them),
+    dated by their run, and its other entries."""
+    for section in ROW_SECTIONS:
+        new = {row["model"]["estimator"]: row for row in results.get(section, [])}
+        kept = [new.pop(row["model"]["estimator"], {"date": earlier["date"], **row}) for row in earlier.get(section, [])]
+        if kept or new:
+            results[section] = kept + list(new.values())
+    return {**earlier, **results}
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--data-dir", default=DEFAULT_DATA)
@@ -640,6 +691,13 @@ def main(argv=None):
     parser.add_argument("--in-band", action="store_true",
                         help="with --above-band-network: the networks model the error in the band as well "
                              "(AboveBandRegressor(in_band=True))")
+    parser.add_argument("--lru-draws", type=int, nargs="*", default=[], metavar="S",
+                        help="also f16_lru.py's model of the protocol on these draws (a decoupled model of 18 "
+                             "states, networks of linear recurrent units above the band; about 4 minutes a draw): "
+                             "their mean a row, each draw's rows under draws")
+    parser.add_argument("--keep-rows", action="store_true",
+                        help="keep what the output file holds that this run does not produce (rows by model "
+                             "name, each dated by its run); the best taken over all rows")
     parser.add_argument("--output", default=RESULTS / "f16.json")
     args = parser.parse_args(argv)
     args.weighting = None if args.weighting == "none" else args.weighting
@@ -727,18 +785,27 @@ def main(argv=None):
     if not args.no_pnlss:
         rows += fit_pnlss(args, bla, X, y, test)
 
+    if args.lru_draws:
+        mean, lru_draws = lru_rows(args)
+        rows += mean
+        draws += lru_draws
+
     results["models"] = rows
     results["draws"] = draws
     if weightings:
         results["weightings"] = weightings
     if with_sweeps:
         results["with_sweeps"] = with_sweeps
-    results["best"] = min((r for r in rows if not r["model"].get("non_causal")), key=lambda r: r["mean_nrmse"])
     if decoupled_models:
         row, model = min(decoupled_models, key=lambda rm: rm[0]["mean_nrmse"])
         results["force_above_band"] = {"model": row["model"]["estimator"], **force_above_band(model, X, y, test)}
-    print(f"best: {results['best']['model']['estimator']}, mean NRMSE {results['best']['mean_nrmse']:.3f} "
-          f"(published: REN 0.162; deep LRU on level 6: 0.134 / 0.099 / 0.237)")
+    for section in ROW_SECTIONS:
+        for row in results.get(section, []):
+            row["date"] = results["date"]
+    if args.keep_rows and Path(args.output).exists():
+        results = with_kept_rows(json.loads(Path(args.output).read_text()), results)
+    results["best"] = best_within_budget([r for r in results["models"] if not r["model"].get("non_causal")])
+    print("(published: REN 0.162; deep LRU on level 6: 0.134 / 0.099 / 0.237)")
     write_results(results, args.output)
 
 
