@@ -137,6 +137,27 @@ def test_pipeline_chains_bla_pnlss_decoupled():
     assert dec.n_nonlinear_params_ < full.n_nonlinear_params_
 
 
+def test_a_frozen_start_model_is_used_as_it_is():
+    """A fitted full model wrapped in FrozenEstimator is the start itself,
+    not refitted: the same decoupled model as from the clone the default
+    route fits on the same signals (its fit is deterministic), with the
+    full model's fit left out of the time; a wrapper of an unfitted model,
+    of another estimator or of other inputs is refused by name."""
+    from sklearn.frozen import FrozenEstimator
+
+    X, y = _data()
+    fitted_here = _small().fit(X, y)
+    full = PNLSSRegressor(2, degrees=(2, 3), period=N, max_iter=40).fit(X, y)
+    frozen = _small(start_model=FrozenEstimator(full)).fit(X, y)
+    assert frozen.start_model_ is full
+    np.testing.assert_array_equal(frozen.predict(X), fitted_here.predict(X))
+    two_inputs = np.concatenate([X[:2], X[1:]], axis=2)
+    for wrapped, error in ((PNLSSRegressor(2), "not fitted"), (BLAEstimator(2, period=N).fit(X, y), "wraps a BLA"),
+                           (PNLSSRegressor(2, period=N, max_iter=2).fit(two_inputs, y[:2]), "input channel")):
+        with pytest.raises((TypeError, ValueError), match=error):
+            _small(start_model=FrozenEstimator(wrapped)).fit(X, y)
+
+
 def test_same_random_state_same_model_in_parallel():
     X, y = _data()
     a = _small(n_jobs=1).fit(X, y)

@@ -7,6 +7,7 @@ from numbers import Integral
 import numpy as np
 from joblib import Parallel, delayed
 from sklearn.base import clone
+from sklearn.frozen import FrozenEstimator
 from sklearn.utils import check_random_state
 from sklearn.utils.validation import check_is_fitted
 
@@ -127,12 +128,16 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
     output_branches : bool, default=False
         Let the branches enter the output equation too (``W_y`` fitted); the
         default start then carries an output polynomial as well.
-    start_model : PNLSSRegressor or None, default=None
-        The full model to start from (cloned and fitted; ``init="cpd"``
-        only); None uses ``PNLSSRegressor(n_states, degrees=(2, 3),
-        variables="states_inputs", period=period)`` (the paper's start). In
-        a Pipeline after a fitted ``PNLSSRegressor`` stage, that stage is the
-        start instead.
+    start_model : PNLSSRegressor, FrozenEstimator or None, default=None
+        The full model to start from (``init="cpd"`` only): a
+        ``PNLSSRegressor`` is cloned and fitted on the signals given to
+        ``fit``; a fitted one wrapped in
+        :class:`sklearn.frozen.FrozenEstimator` is used as it is (not
+        refitted: a large full model fitted once serves every decoupled
+        model tried from it). None uses ``PNLSSRegressor(n_states,
+        degrees=(2, 3), variables="states_inputs", period=period)`` (the
+        paper's start). In a Pipeline after a fitted ``PNLSSRegressor``
+        stage, that stage is the start instead.
     extrapolation : {"hold", "linear", "polynomial"}, default="hold"
         What each branch does where its input leaves the range it covered in
         training (``z_range_``, widened by ``range_margin``). "hold": the
@@ -237,7 +242,7 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
         "n_init": [Interval(Integral, 1, None, closed="left")],
         "n_points": [Interval(Integral, 2, None, closed="left")],
         "output_branches": ["boolean"],
-        "start_model": [None, PNLSSRegressor],
+        "start_model": [None, PNLSSRegressor, FrozenEstimator],
         "extrapolation": [Options(str, {"hold", "linear", "polynomial"})],
         "n_jobs": [Integral, None],
     }
@@ -383,20 +388,37 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
                     "DecoupledPNLSSRegressor starts from a PNLSSRegressor (or BLAEstimator) stage; "
                     f"the previous Pipeline stage is a {type(stage).__name__}."
                 )
-            if self.start_model is not None:
-                start = clone(self.start_model)
+            if isinstance(self.start_model, FrozenEstimator):
+                start = self._frozen_start(X_list)
             else:
-                start = PNLSSRegressor(
+                start = clone(self.start_model) if self.start_model is not None else PNLSSRegressor(
                     self.n_states, degrees=(2, 3), variables="states_inputs",
                     equations="both" if self.output_branches else "state", period=self.period_,
                     random_state=self.random_state,
                 )
-            X_fit = X_list if stage is None else attach_stage(X_list, stage)
-            X_val, y_val = val if val is not None else (None, None)
-            start.fit(X_fit, y_list, X_val=X_val, y_val=y_val, time_weight=weights)
+                X_fit = X_list if stage is None else attach_stage(X_list, stage)
+                X_val, y_val = val if val is not None else (None, None)
+                start.fit(X_fit, y_list, X_val=X_val, y_val=y_val, time_weight=weights)
         if start.n_states != self.n_states:
             raise ValueError(
                 f"The start model has n_states={start.n_states} but n_states={self.n_states}; make them equal."
+            )
+        return start
+
+    def _frozen_start(self, X_list):
+        """The fitted full model ``start_model`` wraps, as it is."""
+        start = self.start_model.estimator
+        if not isinstance(start, PNLSSRegressor):
+            raise TypeError(
+                f"start_model wraps a {type(start).__name__}; the full model to start from is a fitted "
+                "PNLSSRegressor: FrozenEstimator(PNLSSRegressor(...).fit(X, y))."
+            )
+        check_is_fitted(start, "model_", msg="start_model wraps a PNLSSRegressor that is not fitted; fit it "
+                        "before wrapping it in FrozenEstimator, or pass it unwrapped to have it fitted here.")
+        if X_list[0].shape[1] != start.n_features_in_:
+            raise ValueError(
+                f"X has {X_list[0].shape[1]} input channel(s) but the frozen start_model was fitted on "
+                f"{start.n_features_in_}; fit the decoupled model on signals of the start model's inputs."
             )
         return start
 
