@@ -1,5 +1,6 @@
 """What the benchmark scripts share: paths, the machine description,
 timing, the cold/warm numba compile measurement and the results file."""
+import ast
 import json
 import os
 import platform
@@ -38,6 +39,15 @@ def header():
             "sklearn_pnlss": sklearn_pnlss.__version__,
         },
     }
+
+
+def setting_value(text):
+    """A ``KEY=VALUE`` option's value: a Python literal (3, 0.5, True),
+    else the text."""
+    try:
+        return ast.literal_eval(text)
+    except (ValueError, SyntaxError):
+        return text
 
 
 def commit_of(checkout=REPO):

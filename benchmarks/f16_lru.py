@@ -2,7 +2,8 @@
 linear recurrent units (``LRUAboveBandRegressor``), trained on the
 estimation levels' multisines and sine sweeps (issue 35).
 
-    python benchmarks/f16_lru.py [--draws 0 1 2 3] [--single 0] [--data-dir DIR] [--output FILE]
+    python benchmarks/f16_lru.py [--draws 0 1 2 3] [--single 0] [--network KEY=VALUE ...]
+        [--data-dir DIR] [--output FILE]
 
 The model of the band is a decoupled model
 (``DecoupledPNLSSRegressor(18, n_branches=3, degree=3,
@@ -28,7 +29,9 @@ on the multisines (each its periods' mean, in steady state) and the
 estimation levels' sine sweeps (segments from rest). The numbers of
 members and networks are what the two cores fit side by side (two draws
 of two members with one network each spread from 0.127 to 0.137);
-nothing else was chosen on the test levels.
+nothing else was chosen on the test levels. ``--network`` changes a setting
+of the networks (``LRUAboveBandRegressor``'s) to measure a variant on the
+same draws (``--draws 0 --network n_layers=1 --output /tmp/one_layer.json``).
 
 Each row holds the test multisines' NRMSE (periodic steady state), the test
 levels' sine sweeps (from rest), the fit time (the BLA's, the model's and
@@ -49,12 +52,12 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import bench_f16  # noqa: E402
-from _bench_utils import RESULTS, header, write_results  # noqa: E402
+from _bench_utils import RESULTS, header, setting_value, write_results  # noqa: E402
 from f16_clearances import (BASIS, BRANCHES, DEGREE, STATES, MeanOfMembers, load_and_start,  # noqa: E402
                             map_signals)
 
 
-def draw_rows(name, settings, model, start, start_s, X, y, train_sweeps, test, seed):
+def draw_rows(name, settings, model, start, start_s, X, y, train_sweeps, test, seed, network_settings=None):
     """The rows of one draw (the model of the band alone, then with the
     network above it) and the network's model with its own fit time."""
     from sklearn.frozen import FrozenEstimator
@@ -69,8 +72,8 @@ def draw_rows(name, settings, model, start, start_s, X, y, train_sweeps, test, s
     rows = [bench_f16.entry(name, settings, model, test, start_s + model_s)]
     t0 = time.perf_counter()
     network = LRUAboveBandRegressor(FrozenEstimator(model), cutoff=bench_f16.BAND_EDGES[1], fs=400.0,
-                                    n_networks=N_NETWORKS, n_jobs=N_NETWORKS,
-                                    random_state=seed).fit(*map_signals(X, y, train_sweeps, True))
+                                    n_networks=N_NETWORKS, n_jobs=N_NETWORKS, random_state=seed,
+                                    **(network_settings or {})).fit(*map_signals(X, y, train_sweeps, True))
     network_s = time.perf_counter() - t0
     params = network.get_params(deep=False)
     named = {k: params[k] for k in ("width", "n_layers", "n_modes", "max_iter", "learning_rate", "segment_length",
@@ -140,17 +143,22 @@ def main(argv=None):
                         help="the averaged models' draws")
     parser.add_argument("--single", type=int, nargs="*", default=[],
                         help="the single fits' draws (the better of two starts)")
+    parser.add_argument("--network", action="append", default=[], metavar="KEY=VALUE",
+                        help="a setting of the networks (LRUAboveBandRegressor's), a Python literal or text")
     parser.add_argument("--output", default=RESULTS / "f16_lru.json")
     args = parser.parse_args(argv)
+    network_settings = {k: setting_value(v) for k, v in (kv.split("=", 1) for kv in args.network)}
 
     X, y, test, train_sweeps, start, start_s = load_and_start(args.data_dir)
     results = {**header(), "protocol": {"train_levels": bench_f16.TRAIN_LEVELS, "test_levels": bench_f16.TEST_LEVELS},
-               "published": bench_f16.PUBLISHED, "start_s": start_s, "draws": [], "single": [], "averages": []}
+               "published": bench_f16.PUBLISHED, "start_s": start_s, "network_settings": network_settings,
+               "draws": [], "single": [], "averages": []}
     members = {}
     for kind, seeds, model_of in (("draws", args.draws, averaged), ("single", args.single, single)):
         for seed in seeds:
             print(f"{kind}: draw {seed}", flush=True)
-            rows, network = draw_rows(*model_of(seed), start, start_s, X, y, train_sweeps, test, seed)
+            rows, network = draw_rows(*model_of(seed), start, start_s, X, y, train_sweeps, test, seed,
+                                      network_settings)
             results[kind].append({"random_state": seed, "rows": rows})
             if kind == "draws":
                 members[seed] = network

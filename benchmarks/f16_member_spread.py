@@ -31,7 +31,6 @@ runs before the refusal had them. Writes ``results/f16_member_spread.json``.
 members of the earlier runs, ``bench_f16.py``'s model from one start).
 """
 import argparse
-import ast
 import itertools
 import sys
 import time
@@ -43,7 +42,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import bench_f16  # noqa: E402
 import f16_lru  # noqa: E402
-from _bench_utils import RESULTS, header, write_results  # noqa: E402
+from _bench_utils import RESULTS, header, setting_value, write_results  # noqa: E402
 from f16_clearances import load_and_start  # noqa: E402
 
 # members of a model of the band in f16_lru.py's pair of draws
@@ -62,14 +61,6 @@ def fit_draw(draw, Xs, y, check_records, check_outputs, member_settings):
     fit_s = time.perf_counter() - t0
     kept = [str(w.message) for w in caught if "is kept instead" in str(w.message)]
     return averaged.estimators_, fit_s, kept
-
-
-def _value(text):
-    """A ``--member`` value: a Python literal (3, 0.5, True), else the text."""
-    try:
-        return ast.literal_eval(text)
-    except (ValueError, SyntaxError):
-        return text
 
 
 def score(predictions, test, seeds):
@@ -118,7 +109,7 @@ def main(argv=None):
         parser.error(f"--seeds must be even and at least {PAIR_MEMBERS}")
     if any("=" not in kv for kv in args.member):
         parser.error("--member takes KEY=VALUE")
-    member_settings = {k: _value(v) for k, v in (kv.split("=", 1) for kv in args.member)}
+    member_settings = {k: setting_value(v) for k, v in (kv.split("=", 1) for kv in args.member)}
 
     X, y, test, train_sweeps, start, start_s = load_and_start(args.data_dir)
     Xs, check_records = start.transform(X), [d.X[0] for d in train_sweeps]
