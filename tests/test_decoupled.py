@@ -3,6 +3,7 @@ reproducibility, the unstable-start fallback, and the paper's finding on the
 Bouc-Wen benchmark."""
 import numpy as np
 import pytest
+from sklearn.base import clone
 from sklearn.pipeline import make_pipeline
 
 import sklearn_pnlss.estimators.decoupled as decoupled_module
@@ -150,6 +151,7 @@ def test_a_frozen_start_model_is_used_as_it_is():
     full = PNLSSRegressor(2, degrees=(2, 3), period=N, max_iter=40).fit(X, y)
     frozen = _small(start_model=FrozenEstimator(full)).fit(X, y)
     assert frozen.start_model_ is full
+    assert clone(frozen).start_model.estimator is full  # a grid search's clones share the one fitted model
     np.testing.assert_array_equal(frozen.predict(X), fitted_here.predict(X))
     two_inputs = np.concatenate([X[:2], X[1:]], axis=2)
     for wrapped, error in ((PNLSSRegressor(2), "not fitted"), (BLAEstimator(2, period=N).fit(X, y), "wraps a BLA"),
