@@ -31,14 +31,13 @@ kept), with the commit measured.
 import argparse
 import collections
 import json
-import subprocess
 import sys
 import threading
 import time
 from pathlib import Path
 
 import numpy as np
-from _bench_utils import RESULTS, header
+from _bench_utils import RESULTS, commit_of, header
 
 import gap_withheld as gw
 import sklearn_pnlss
@@ -176,8 +175,7 @@ def main(argv=None):
     parser.add_argument("--n-jobs", type=int, default=2)
     args = parser.parse_args(argv)
     code = Path(sklearn_pnlss.__file__).resolve().parents[1]
-    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
-                            cwd=code).stdout.strip()
+    commit = commit_of(code)
     rows = []
     for name in args.cases:
         row = run_case(name, args.n_jobs)

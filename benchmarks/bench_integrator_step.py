@@ -25,13 +25,12 @@ kept), with the commit measured.
 """
 import argparse
 import json
-import subprocess
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
-from _bench_utils import RESULTS, header
+from _bench_utils import RESULTS, commit_of, header
 
 import gap_structures as gs
 import gap_withheld as gw
@@ -109,8 +108,7 @@ def main(argv=None):
     parser.add_argument("--label", required=True, help="name of this measurement (e.g. before, after)")
     args = parser.parse_args(argv)
     code = Path(sklearn_pnlss.__file__).resolve().parents[1]
-    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
-                            cwd=code).stdout.strip()
+    commit = commit_of(code)
     X, _ = multisine(gw.PERIOD, fs=gw.FS, f_band=(5.0, 150.0), rms=50.0, n_periods=1, n_realizations=1,
                      random_state=0)
     u_fine = upsample_fft(X[0, :, 0], RATE, periodic=True)

@@ -30,13 +30,12 @@ The right answer is the effect's name, no effect for the null case, and
 """
 import argparse
 import json
-import subprocess
 import sys
 import time
 from collections import Counter
 
 import numpy as np
-from _bench_utils import RESULTS, header
+from _bench_utils import RESULTS, commit_of, header
 from numba import njit
 
 from sklearn_pnlss.gap import GapDiagnosis, default_effects
@@ -58,7 +57,7 @@ from sklearn_pnlss.signals import linear_chirp, multisine
 
 FS, OVERSAMPLING = 750.0, 20
 OUT = RESULTS / "gap_generated.json"
-COMMIT = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
+COMMIT = commit_of()
 
 #: The truths a seed draws from (the null case and the effects no candidate
 #: holds as often as each effect).

@@ -41,14 +41,12 @@ Writes ``results/gap_withheld_family_s.json`` (``--periods 1``:
 """
 import argparse
 import json
-import subprocess
 import sys
 import time
 import warnings
-from pathlib import Path
 
 import numpy as np
-from _bench_utils import RESULTS, header
+from _bench_utils import RESULTS, commit_of, header
 
 from sklearn_pnlss.gap import StructuralGapDiagnosis
 from sklearn_pnlss.gap.connections.diagnosis import EXPLAINED_DB
@@ -59,8 +57,7 @@ FS, PERIOD, OVERSAMPLING, N_PERIODS, NOISE = 200.0, 4096, 20, 3, 0.01
 TRAIN_LEVELS, VALIDATION_LEVELS = (1.0, 2.0, 3.0), (1.5, 2.5)
 EFFECTS = ("cubic_stiffness", "coulomb_friction", "backlash", "quadratic_damping", "hysteresis", None)
 NOMINALS = ("exact", "modal", "off")
-COMMIT = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
-                        cwd=Path(__file__).parent).stdout.strip() or None
+COMMIT = commit_of() or None
 
 
 def draw_structure(rng):

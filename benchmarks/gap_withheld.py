@@ -34,14 +34,12 @@ several degrees of freedom (issue 38, ``gap_structures.py``).  Each writes
 """
 import argparse
 import json
-import subprocess
 import sys
 import time
 from collections import Counter
-from pathlib import Path
 
 import numpy as np
-from _bench_utils import RESULTS, header
+from _bench_utils import RESULTS, commit_of, header
 
 from sklearn_pnlss.gap import GapDiagnosis, default_effects, linear_nominal
 from sklearn_pnlss.gap.candidates.effects import delay_signal
@@ -66,8 +64,7 @@ NOMINAL = Oscillator(M, C, K)
 DURATION = 4 * PERIOD / FS
 VERBOSE = 0
 # the code that measured a case (a results file merged by --update holds several)
-COMMIT = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
-                        cwd=Path(__file__).parent).stdout.strip() or None
+COMMIT = commit_of() or None
 
 
 def _clip(level):
