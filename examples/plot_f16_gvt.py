@@ -295,7 +295,7 @@ if train is not None:
 #   which branches in signed powers (``branch_basis="signed_powers"``:
 #   ``z``, ``z|z|``, ``z**3`` ...) write directly; of degree 5 they take the
 #   18-state model's mean from 0.182 to 0.175, most of it at level 2, but
-#   on the sine sweeps they gain nothing (README, F-16 section). What is
+#   on the sine sweeps they gain nothing (benchmarks/F16.md). What is
 #   left in the band is one mode's damping: pairing the modes of a linear
 #   model of each level, measured and simulated
 #   (``sklearn_pnlss.level_modes.modes_by_level``;
@@ -314,7 +314,7 @@ if train is not None:
 #   by a damping below zero at rest, which the branches' higher powers
 #   turn positive at the fitted levels: such a model rings by itself under
 #   no force. The fit warns of it; ``stable_at_rest=True`` refuses those
-#   steps, at some cost on the test levels (README, F-16 section).
+#   steps, at some cost on the test levels (benchmarks/F16.md).
 # - **Several starts.** The mean of fits from other random starts
 #   (``AveragedRegressor``, ``benchmarks/f16_averaged.py``) takes the
 #   18-state model from 0.151 to 0.146 with two members, and the test

@@ -1,5 +1,5 @@
 """The documentation builds without a warning, its API reference covers
-every public module, and every figure the README and the user guide quote
+every public module, and every figure the README, benchmarks/F16.md and the user guide quote
 matches the run it comes from (see "Quoted figures" below).
 
 The build runs sphinx with ``-W`` on a copy of ``docs/`` and ``examples/`` in
@@ -155,7 +155,7 @@ def test_examples_run_without_file_too(script):
 
 
 # ---------------------------------------------------------------------------
-# Quoted figures: every figure the README and the user guide quote comes
+# Quoted figures: every figure the README, benchmarks/F16.md and the user guide quote comes
 # from a run that the test suite or a benchmark repeats, and is checked
 # against it here, so the text cannot drift from the code again.
 #
@@ -182,7 +182,7 @@ import textwrap
 
 RESULTS = ROOT / "benchmarks" / "results"
 # Text files whose figures are checked, relative to the project root.
-FIGURE_FILES = ["README.md", "docs/index.rst", "docs/install.rst",
+FIGURE_FILES = ["README.md", "benchmarks/F16.md", "docs/index.rst", "docs/install.rst",
                 *(f"docs/user_guide/{name}.rst" for name in USER_GUIDE)]
 NUMBER = re.compile(r"(?:(?<![\w)\]])[-−])?(?<![\w.])\d+(?:\.\d+)?(?:e[-+]?\d+)?")
 # A figure: numbers (joined by "/", "to", "of", "and", "-") followed by a unit
@@ -746,6 +746,7 @@ class Figure:
         return f"{self.path}: {self.text}"
 
 
+S = "benchmarks/F16.md"  # the F-16 study behind the README's table
 R, CONV, PN, DEC, SEL, CLI, GAP = ("README.md", "docs/user_guide/conventions.rst", "docs/user_guide/pnlss.rst",
                                    "docs/user_guide/decoupling.rst", "docs/user_guide/selection.rst",
                                    "docs/user_guide/command_line.rst", "docs/user_guide/gap.rst")
@@ -1277,8 +1278,8 @@ FIGURES = [
     Figure(GAP, "explains the least of all: 35 % of it and 19 % of the added damping", SOFTENING,
            lambda: [_softening_share(["wing", "payload"], key) for key in ("stiffness_explained", "damping_explained")]),
     # README
-    Figure(R, "excited 2-15 Hz band", F16, lambda: [2, 15]),
-    Figure(R, "18-state model reaches level 2 at 0.080 / 0.071 / 0.070 (relative: 0.081 / 0.091 / 0.101), but "
+    Figure(S, "excited 2-15 Hz band", F16, lambda: [2, 15]),
+    Figure(S, "18-state model reaches level 2 at 0.080 / 0.071 / 0.070 (relative: 0.081 / 0.091 / 0.101), but "
               "level 5 is fitted to 0.240 / 0.230 / 0.376 (relative: 0.194 / 0.124 / 0.295) and the mean over the "
               "test levels is 0.207 against 0.171 (the table's 0.179 for the same settings came from another machine: "
               "the 18-state fits move with rounding), in 708 s against 322 s", WEIGHTING,
@@ -1289,7 +1290,7 @@ FIGURES = [
                     _f16_model("DecoupledPNLSSRegressor(18, 3, 3) random")["mean_nrmse"], 18,
                     _f16_weighted("noise")["fit_s"],
                     _f16_weighted("relative")["fit_s"]]),
-    Figure(R, "at 10 states level 2 gains (0.141 / 0.165 / 0.159 against 0.169 / 0.202 / 0.201) and levels 4 and 6 "
+    Figure(S, "at 10 states level 2 gains (0.141 / 0.165 / 0.159 against 0.169 / 0.202 / 0.201) and levels 4 and 6 "
               "lose, a mean of 0.231 against 0.230, in 990 s against 83 s", SWEEPS,
            lambda: [_f16_sweeps(True)["model"]["n_states"], 2, *_f16_sweeps(True)["nrmse"]["2"],
                     *_f16_sweeps(False)["nrmse"]["2"], 4, 6, _f16_sweeps(True)["mean_nrmse"],
@@ -1299,45 +1300,45 @@ FIGURES = [
     Figure(PN, "on two simulated levels with 0.2 % and 20 % noise, two realisations of eight periods each: "
               "-58.9 dB on 20 validation records against -47.4 dB pooled and -47.4 dB \"relative\"", NOISE_TEST,
            lambda: [0.2, 20, None, 20, None, None]),
-    Figure(R, "That part alone is an NRMSE of 0.132 in the mean", F16, _f16_floor),
-    Figure(R, "causal FIRs of 200 taps fitted on the estimation levels, the in-band part taken exact from the "
+    Figure(S, "That part alone is an NRMSE of 0.132 in the mean", F16, _f16_floor),
+    Figure(S, "causal FIRs of 200 taps fitted on the estimation levels, the in-band part taken exact from the "
               "measurement): nothing above the band leaves 0.133 in the mean", ROUTES,
            lambda: [_results("f16_above_band_routes")["n_taps"], _route("nothing above the band")["mean_nrmse"]]),
-    Figure(R, "the force gated by the measured envelope of the response there 0.112, the payload on level 6 "
+    Figure(S, "the force gated by the measured envelope of the response there 0.112, the payload on level 6 "
               "still at 0.301", ROUTES,
            lambda: [_route(GATED)["mean_nrmse"], 6, _route(GATED)["nrmse"]["6"][2]]),
-    Figure(R, "each pair's displacement and velocity) 0.176, worse than nothing", ROUTES,
+    Figure(S, "each pair's displacement and velocity) 0.176, worse than nothing", ROUTES,
            lambda: [_route("in-band motion")["mean_nrmse"]]),
-    Figure(R, "Below 0.13 therefore needs both the gate", F16, lambda: [0.13]),
-    Figure(R, "(0.204 / 0.106 / 0.334 on level 6)", F16, lambda: [*_f16_floor(6), 6]),
-    Figure(R, "0.13 needs a model of those modes", F16, lambda: [0.13]),
-    Figure(R, "(`AboveBandRegressor(n_lead=50)`, 125 ms, the lead chosen among 0, 25 and 50 samples on held-out "
+    Figure(S, "Below 0.13 therefore needs both the gate", F16, lambda: [0.13]),
+    Figure(S, "(0.204 / 0.106 / 0.334 on level 6)", F16, lambda: [*_f16_floor(6), 6]),
+    Figure(S, "0.13 needs a model of those modes", F16, lambda: [0.13]),
+    Figure(S, "(`AboveBandRegressor(n_lead=50)`, 125 ms, the lead chosen among 0, 25 and 50 samples on held-out "
               "estimation levels 3 and 5: 0.111, 0.100 and 0.099 there) bring the same model to 0.141 in the mean, "
               "level 6 to 0.123 / 0.111 / 0.196, the payload below the deep LRU's 0.237", LEAD,
            lambda: [_f16_led()["model"]["n_lead"], _f16_led()["model"]["n_lead"] / 400 * 1000,
                     *map(int, _f16_led()["held_out_nrmse_by_lead"]), 3, 5,
                     *_f16_led()["held_out_nrmse_by_lead"].values(), _f16_led()["mean_nrmse"],
                     6, *_f16_led()["nrmse"]["6"], _f16_lru_level_6()[2]]),
-    Figure(R, "`AboveBandRegressor(hidden_units=128, in_band=True)` reads the last 64 samples (0.16 s) of the "
+    Figure(S, "`AboveBandRegressor(hidden_units=128, in_band=True)` reads the last 64 samples (0.16 s) of the "
               "model's simulation in the band, of the gated force and of the force in the band, and gives the model's "
               "whole error at the window's newest sample (41647 weights)", IN_BAND,
            lambda: [_f16_nets()["model"]["hidden_units"], _f16_nets()["model"]["n_taps"],
                     _f16_nets()["model"]["n_taps"] / 400, _f16_nets()["n_above_band_params"]]),
-    Figure(R, "(the forces of any two levels from 2 to 7 correlate at 0.99)", SAME_WAVEFORM, lambda: [2, 7, None]),
-    Figure(R, "one network brings the 18-state model from 0.179 to 0.155 in the mean on the test multisines and from "
+    Figure(S, "(the forces of any two levels from 2 to 7 correlate at 0.99)", SAME_WAVEFORM, lambda: [2, 7, None]),
+    Figure(S, "one network brings the 18-state model from 0.179 to 0.155 in the mean on the test multisines and from "
               "0.240 to 0.227 on the sweeps, in 211 s of fitting in all; the other two draws of its starts go from "
               "0.187 to 0.163 and from 0.181 to 0.154 (sweeps: 0.246 to 0.235, 0.280 to 0.269)", IN_BAND,
            lambda: [18, _f16_nets(0, 0)["mean_nrmse"], _f16_nets()["mean_nrmse"], _f16_nets(0, 0)["mean_nrmse_sweeps"],
                     _f16_nets()["mean_nrmse_sweeps"], _f16_nets()["fit_s"],
                     *[_f16_nets(k, n)["mean_nrmse"] for k in (1, 2) for n in (0, 1)],
                     *[_f16_nets(k, n)["mean_nrmse_sweeps"] for k in (1, 2) for n in (0, 1)]]),
-    Figure(R, "Three networks averaged (`n_networks=3`, 124597 weights) add little: 0.153, 0.161 and 0.154, level 6 "
+    Figure(S, "Three networks averaged (`n_networks=3`, 124597 weights) add little: 0.153, 0.161 and 0.154, level 6 "
               "of the first draw at 0.119 / 0.111 / 0.277 against the deep LRU's 0.134 / 0.099 / 0.237; simulated "
               "from rest over the whole test records, as the official loader scores, 0.169.", IN_BAND,
            lambda: [_f16_nets(0, 3)["model"]["n_networks"], _f16_nets(0, 3)["n_above_band_params"],
                     *[_f16_nets(k, 3)["mean_nrmse"] for k in range(3)], 6, *_f16_nets(0, 3)["nrmse"]["6"],
                     *_f16_lru_level_6(), _f16_nets(0, 3)["mean_nrmse_official"]]),
-    Figure(R, "The gated filters of the same run (772 coefficients, 2 s on top of the model) reach 0.158, 0.166 and "
+    Figure(S, "The gated filters of the same run (772 coefficients, 2 s on top of the model) reach 0.158, 0.166 and "
               "0.159 on the multisines and 0.227, 0.234 and 0.268 on the sweeps", IN_BAND,
            lambda: [_f16_branches("powers", 3, filters=True)["n_above_band_params"],
                     _f16_branches("powers", 3, filters=True)["fit_s"] - _f16_nets(0, 0)["fit_s"],
@@ -1350,19 +1351,19 @@ FIGURES = [
                     max(_f16_nets(k, 0)["mean_nrmse"] - _f16_nets(k)["mean_nrmse"] for k in range(3)),
                     min(_f16_nets(k, 0)["mean_nrmse_sweeps"] - _f16_nets(k)["mean_nrmse_sweeps"] for k in range(3)),
                     max(_f16_nets(k, 0)["mean_nrmse_sweeps"] - _f16_nets(k)["mean_nrmse_sweeps"] for k in range(3))]),
-    Figure(R, "an NRMSE of 0.050 in the mean and 0.071 / 0.044 / 0.122 on level 6", F16,
+    Figure(S, "an NRMSE of 0.050 in the mean and 0.071 / 0.044 / 0.122 on level 6", F16,
            lambda: [*_f16_floor(key="non_periodic_floor"), *_f16_floor(6, "non_periodic_floor"), 6]),
-    Figure(R, "a causal FIR of 300 taps fitted on the training levels' residual) brings level 6 to 0.123 / 0.111 / "
+    Figure(S, "a causal FIR of 300 taps fitted on the training levels' residual) brings level 6 to 0.123 / 0.111 / "
               "0.244, beside the deep LRU's 0.134 / 0.099 / 0.237, but the payload's level 2 from 0.152 to 0.234",
            F16, lambda: [_f16_force("taps"), 6, *_f16_force("nrmse_with_map")["6"], *_f16_lru_level_6(), 2,
                          _f16_model("DecoupledPNLSSRegressor(18, 3, 3) random")["nrmse"]["2"][2],
                          _f16_force("nrmse_with_map")["2"][2]]),
-    Figure(R, "from level 2 to level 6 that grows 32-fold (the force in the band 12-fold) where the response above "
+    Figure(S, "from level 2 to level 6 that grows 32-fold (the force in the band 12-fold) where the response above "
               "the band grows 304- to 7415-fold", F16,
            lambda: [*_f16_force("growth_levels"), _f16_force("force_power_growth_above"),
                     _f16_force("force_power_growth_in_band"), min(_f16_force("output_power_growth_above")),
                     max(_f16_force("output_power_growth_above"))]),
-    Figure(R, "whose dynamics come from the 2-15 Hz band does not produce", F16, lambda: [2, 15]),
+    Figure(S, "whose dynamics come from the 2-15 Hz band does not produce", F16, lambda: [2, 15]),
     Figure(PN, "it adds 772 coefficients to a decoupled model of 18 states, fitted in 2.4 s; the mean test NRMSE "
                "over levels 2, 4 and 6 goes from 0.182 to 0.162 for the model chosen on held-out estimation levels "
                "and from 0.179 to 0.158", F16,
@@ -1390,21 +1391,29 @@ FIGURES = [
                     sum(_clearances(seed, HINGES)["n_above_band_params"] for seed in (0, 1)),
                     sum(_clearances(seed, None)["n_nonlinear_params"] for seed in (0, 1)),
                     _clearances_mean(2, HINGES)["mean_nrmse"], _clearances_mean(2, HINGES)["fit_s"]]),
-    Figure(R, "error above 15.5 Hz as the force's content there, switched on by a gate quadratic in the state "
+    Figure(S, "error above 15.5 Hz as the force's content there, switched on by a gate quadratic in the state "
               "(fitted to that error's amplitude envelope), through FIR filters of 200 taps", F16,
            lambda: [_f16_model(_f16_above(_f16_selected()))["model"][k] for k in ("cutoff_hz", "n_taps")]),
-    Figure(R, "the polynomial model of 18 states reaches 0.158 (level 6: 0.127 / 0.116 / 0.285, the drive point "
+    Figure(S, "the polynomial model of 18 states reaches 0.158 (level 6: 0.127 / 0.116 / 0.285, the drive point "
               "below the deep LRU's 0.134), below the recurrent equilibrium network's 0.162", F16,
            lambda: [18, _f16_polynomial_best()["mean_nrmse"], 6, *_f16_polynomial_best()["nrmse"]["6"],
                     _f16_lru_level_6()[0], next(iter(_results("f16")["published"].values()))["mean"]]),
-    Figure(R, "(0.158, 0.166 and 0.159 for the polynomial branches, 0.162, 0.167 and 0.156 for the spline ones)",
+    Figure(S, "(0.158, 0.166 and 0.159 for the polynomial branches, 0.162, 0.167 and 0.156 for the spline ones)",
            F16, lambda: [_f16_model(_f16_above(m))["mean_nrmse"] if s == 0 else _f16_above_draw(s, m)["mean_nrmse"]
                          for m in ("DecoupledPNLSSRegressor(18, 3, 3) random", _f16_selected()) for s in (0, 1, 2)]),
-    Figure(R, "levels it explains 66 % of the power above the band at the drive point, 25 % on the wing and 20 % on "
+    Figure(S, "levels it explains 66 % of the power above the band at the drive point, 25 % on the wing and 20 % on "
               "the payload", F16,
            lambda: [100 * v for v in _f16_polynomial_best()["above_band_explained_train"]]),
 
     Figure(CONV, "alone is an NRMSE of 0.132 in the mean", F16, _f16_floor),
+    Figure(R, "On level 6 the last row reaches 0.105 / 0.097 / 0.204, every output below the deep network of "
+              "linear recurrent units of Forgione et al. (CDC 2024), 0.134 / 0.099 / 0.237", LRU,
+           lambda: [6, *_lru_pair(0)["nrmse"]["6"], 2024, *_f16_lru_level_6()]),
+    Figure(R, "(the row of 0.143) reach 0.122 / 0.102 / 0.283 there", CLEARANCES,
+           lambda: [_clearances_mean(2, HINGES)["mean_nrmse"], *_clearances_mean(2, HINGES)["nrmse"]["6"]]),
+    Figure(R, "Three other pairs of seeds of the last row reach 0.126, 0.1296 and 0.1299 in the mean",
+           "f16_lru.py (--draws 4 5 6 7): f16_lru.json, f16_lru_draws_4_to_7.json",
+           lambda: [_lru_pair(1)["mean_nrmse"], _lru_pair_4_to_7(0)["mean_nrmse"], _lru_pair_4_to_7(1)["mean_nrmse"]]),
     Figure(R, "levels 2, 4 and 6, 10 states, 2 cores)", F16, lambda: [2, 4, 6, 10, _results("f16")["environment"]["cpu_count"]]),
     Figure(R, "| `BLAEstimator(10)` | 0 | 0.428 | 1.4 s |", F16, lambda: [10, *_f16_row("BLAEstimator(10)")]),
     Figure(R, "| `DecoupledPNLSSRegressor(10, n_branches=3, degree=5, init=\"random\")` | 78 | 0.228 | 48.4 s |", F16,
@@ -1424,9 +1433,9 @@ FIGURES = [
            lambda: [18, 18 * (math.comb(19, 2) + math.comb(20, 3))]),
     Figure(R, "| the same with spline branches (`n_knots=8`), chosen on held-out estimation levels | 141 | 0.182 | "
               "191.3 s |", F16, lambda: [8, *_f16_row(_f16_selected())]),
-    Figure(R, "holds out estimation levels 3 and 5 in turn", F16,
+    Figure(S, "holds out estimation levels 3 and 5 in turn", F16,
            lambda: [int(k[1:]) for k in _results("f16")["selection"]["grid"][0]["held_out_nrmse"]]),
-    Figure(R, "Three spline branches on 8 knots do best there (held-out NRMSE 0.178 in the mean; polynomial branches "
+    Figure(S, "Three spline branches on 8 knots do best there (held-out NRMSE 0.178 in the mean; polynomial branches "
               "0.224, six branches 0.216 and 0.209), but refitted on the four levels they are no better than the "
               "polynomial ones", F16,
            lambda: [8, *(_f16_held_out(r, k) for r, k in ((3, 8), (3, None), (6, None), (6, 8)))]
@@ -1434,13 +1443,13 @@ FIGURES = [
            and _f16_model(_f16_selected())["mean_nrmse"] >= _f16_model(
                "DecoupledPNLSSRegressor(18, 3, 3) random")["mean_nrmse"]
            else [None]),
-    Figure(R, "three draws of the random starts give 0.182, 0.188 and 0.176, where the polynomial branches give 0.179, "
+    Figure(S, "three draws of the random starts give 0.182, 0.188 and 0.176, where the polynomial branches give 0.179, "
               "0.187 and 0.181",
            F16, lambda: [_f16_model(_f16_selected())["mean_nrmse"],
                          *(_f16_draw(s, _f16_selected())["mean_nrmse"] for s in (1, 2)),
                          _f16_model("DecoupledPNLSSRegressor(18, 3, 3) random")["mean_nrmse"],
                          *(_f16_draw(s)["mean_nrmse"] for s in (1, 2))]),
-    Figure(R, "(0.176 at 42.50 dB, 0.188 at 42.58 dB)", F16,
+    Figure(S, "(0.176 at 42.50 dB, 0.188 at 42.58 dB)", F16,
            lambda: [v for r in sorted(_f16_rows_18(), key=lambda r: r["mean_nrmse"])[::len(_f16_rows_18()) - 1]
                     for v in (r["mean_nrmse"], r["train_cost_db"])]),
     Figure(R, "(42.74 dB against 43.83 dB at 14 states and 45.21 dB at 10)", F16,
@@ -1451,16 +1460,16 @@ FIGURES = [
                          *_f16_row("PNLSSRegressor(10, (2, 3), states)")]),
     Figure(R, "| recurrent equilibrium network (Revay et al., 2023) | | 0.162 |", "the published figure",
            lambda: [2023, next(iter(_results("f16")["published"].values()))["mean"]]),
-    Figure(R, "(2893 parameters and 98304 residuals) takes 4.94 s, where its Gram matrix J^T J needs 2.61 s",
+    Figure(S, "(2893 parameters and 98304 residuals) takes 4.94 s, where its Gram matrix J^T J needs 2.61 s",
            F16,
            lambda: [_f16_model("PNLSSRegressor(10, (2, 3), states)")["n_params"],
                     _f16_model("PNLSSRegressor(10, (2, 3), states)")["gram_rows"],
                     _f16_model("PNLSSRegressor(10, (2, 3), states)")["fit_s"]
                     / _f16_model("PNLSSRegressor(10, (2, 3), states)")["n_iter"],
                     _f16_iteration("J'J at the measured BLAS rate")]),
-    Figure(R, "the Gram matrix, the gradient and a simulation take 3.45 s, the sensitivity recursion 0.95 s", F16,
+    Figure(S, "the Gram matrix, the gradient and a simulation take 3.45 s, the sensitivity recursion 0.95 s", F16,
            lambda: [_f16_iteration("J'J, J'e and a simulation"), _f16_iteration("sensitivity kernel")]),
-    Figure(R, "the step 0.35 s (a Cholesky factorisation per trial, where the eigendecomposition would take 2.03 s)",
+    Figure(S, "the step 0.35 s (a Cholesky factorisation per trial, where the eigendecomposition would take 2.03 s)",
            F16, lambda: [_f16_step(), _f16_iteration("eigendecomposition instead (not used)")]),
     Figure(PN, "its steps cost 0.35 s per iteration, where the eigendecomposition alone would take 2.03 s", F16,
            lambda: [_f16_step(), _f16_iteration("eigendecomposition instead (not used)")]),
@@ -1494,9 +1503,9 @@ FIGURES = [
                 "sweep, powers -93.35 / -101.69 dB",
            "tests/test_main_job.py::test_main_job_with_branches_in_signed_powers (and the default run's test)",
            lambda: [None] * 4),
-    Figure(R, "Branches in signed powers, which gain Bouc-Wen 8 dB", BASIS,
+    Figure(S, "Branches in signed powers, which gain Bouc-Wen 8 dB", BASIS,
            lambda: [statistics.mean([_basis_median()[0] - _basis_median()[2], _basis_median()[1] - _basis_median()[3]])]),
-    *(Figure(R, f"| {label} | {text} |", SIGNED,
+    *(Figure(S, f"| {label} | {text} |", SIGNED,
              lambda basis=basis, degree=degree: [degree, *_f16_branch_row(basis, degree)])
       for label, basis, degree, text in [
           ("powers, degree 3", "powers", 3, "0.179 (0.240) | 0.187 (0.246) | 0.181 (0.280) | 0.158 / 0.166 / 0.159"),
@@ -1506,7 +1515,7 @@ FIGURES = [
           ("signed powers, degree 5", "signed_powers", 5,
            "0.173 (0.247) | 0.173 (0.268) | 0.180 (0.261) | 0.151 / 0.151 / 0.160"),
       ]),
-    Figure(R, "Signed powers of degree 5 do best on the test multisines (0.175 over the draws, 0.154 with the "
+    Figure(S, "Signed powers of degree 5 do best on the test multisines (0.175 over the draws, 0.154 with the "
               "filters, against 0.182 and 0.161 for the powers of degree 3), but not on the sweeps (0.258 against "
               "0.255); the gain is at level 2 (0.091 / 0.112 / 0.114 on the first draw, in powers 0.112 / 0.141 / "
               "0.152)", SIGNED,
@@ -1515,14 +1524,14 @@ FIGURES = [
                     _f16_branch_mean("signed_powers", 5, "mean_nrmse_sweeps"),
                     _f16_branch_mean("powers", 3, "mean_nrmse_sweeps"), 2,
                     *_f16_branches("signed_powers", 5)["nrmse"]["2"], *_f16_branches("powers", 3)["nrmse"]["2"]]),
-    Figure(R, "a line in the force rms follows the frequency of each mode of a linear model of each level 2.0 to "
+    Figure(S, "a line in the force rms follows the frequency of each mode of a linear model of each level 2.0 to "
               "2.8 times closer than a line in its square (the 7.3 Hz mode: 7.32, 7.29 and 7.26 Hz at levels 1, 2 "
               "and 3", LEVEL_MODES,
            lambda: [*(f([law["misfit_quadratic_hz"] / law["misfit_linear_hz"]
                          for law in _results("f16_level_modes")["frequency_laws"]]) for f in (min, max)),
                     _results("f16_level_modes")["frequencies_hz"][0][3],
                     *(_results("f16_level_modes")["frequencies_hz"][k][3] for k in range(3)), 1, 2, 3]),
-    Figure(R, "The 18-state model in signed powers of degree 5 so trained (`--also-sweeps --branch-basis "
+    Figure(S, "The 18-state model in signed powers of degree 5 so trained (`--also-sweeps --branch-basis "
               "signed_powers`, first draw, `benchmarks/results/f16_sweeps_signed.json`) simulates the test levels' "
               "sweeps, a waveform the multisines never showed it, at 0.169 in the mean against 0.247 when trained on "
               "the multisines alone, but the test multisines at 0.192 against 0.173, in 2517 s of fitting",
@@ -1532,18 +1541,18 @@ FIGURES = [
                     _results("f16_sweeps_signed")["with_sweeps"][0]["mean_nrmse"],
                     _results("f16_sweeps_signed")["models"][1]["mean_nrmse"],
                     _results("f16_sweeps_signed")["with_sweeps"][0]["fit_s"]]),
-    Figure(R, "add nothing: 0.167, 0.184 and 0.179 over the three draws (0.148, 0.163 and 0.157 with the filters), "
+    Figure(S, "add nothing: 0.167, 0.184 and 0.179 over the three draws (0.148, 0.163 and 0.157 with the filters), "
               "against 0.173, 0.173 and 0.180 without", OUTPUT_BRANCHES,
            lambda: [*(_f16_branches("signed_powers", 5, seed, filters, output_branches=True)["mean_nrmse"]
                       for filters in (False, True) for seed in range(3)),
                     *(_f16_branches("signed_powers", 5, seed)["mean_nrmse"] for seed in range(3))]),
-    Figure(R, "at every level the model has the 7.3 Hz mode within 0.004 Hz of the measured one, but of level 2's "
+    Figure(S, "at every level the model has the 7.3 Hz mode within 0.004 Hz of the measured one, but of level 2's "
               "error in the band (0.089 / 0.111 / 0.113) that mode holds 63 to 74 % of the power (0.071 / 0.091 / "
               "0.098), and of levels 4 and 6 35 to 59 %", LEVEL_MODES_MODEL,
            lambda: [_mode_73("frequencies_hz")[0][0], max(abs(a - b) for a, b in zip(*_mode_73("frequencies_hz"))), 2,
                     *_level_model()["nrmse_in_band"]["2"], *_mode_73_share(2), *_level_model()["nrmse_by_mode"]["2"][3],
                     4, 6, *_mode_73_share(4, 6)]),
-    Figure(R, "Its damping is where the model is off: 0.48 % against the measured 0.51 % at level 2, 1.14 % against "
+    Figure(S, "Its damping is where the model is off: 0.48 % against the measured 0.51 % at level 2, 1.14 % against "
               "1.26 % at level 4, 1.73 % against 1.61 % at level 6. The measured damping of that mode stays at 0.51 % "
               "to level 2, then rises to 0.62, 1.26, 1.50, 1.61 and 1.88 % (the joint starting to slip between "
               "levels 3 and 4)", LEVEL_MODES_MODEL,
@@ -1551,22 +1560,22 @@ FIGURES = [
                                                        100 * _mode_73("damping_ratios")[0][lv - 1], lv)),
                     100 * _mode_73("damping_ratios")[0][1], 2, *(100 * z for z in _mode_73("damping_ratios")[0][2:]),
                     3, 4]),
-    Figure(R, "the first draw's test error lies in the band at 0.089 / 0.111 / 0.114 on level 2 and 0.066 / 0.077 / "
+    Figure(S, "the first draw's test error lies in the band at 0.089 / 0.111 / 0.114 on level 2 and 0.066 / 0.077 / "
               "0.090 on level 6, above it at 0.017 / 0.015 / 0.012 and 0.115 / 0.091 / 0.283", BUDGET,
            lambda: [*_budget()["draws"][0]["in_band"]["2"], 2, *_budget()["draws"][0]["in_band"]["6"], 6,
                     *_budget()["draws"][0]["above_band"]["2"], *_budget()["draws"][0]["above_band"]["6"]]),
-    Figure(R, "With the band exact its mean would be 0.105, with everything above the band exact 0.091: 0.13 takes "
+    Figure(S, "With the band exact its mean would be 0.105, with everything above the band exact 0.091: 0.13 takes "
               "an error in the band of 0.061 on every level and output", BUDGET,
            lambda: [_budget()["draws"][0]["mean_in_band_exact"], _budget()["draws"][0]["mean_above_band_exact"],
                     _budget()["target"], _budget()["draws"][0]["in_band_needed"]]),
-    Figure(R, "(the estimation levels themselves are fitted to 0.040 to 0.078 there), or the error above the band "
+    Figure(S, "(the estimation levels themselves are fitted to 0.040 to 0.078 there), or the error above the band "
               "cut to 0.75 of today's", f"{LEVEL_MODES_MODEL}; {BUDGET}",
            lambda: [min(v for lv in (1, 3, 5, 7) for v in _level_model()["nrmse_in_band"][str(lv)]),
                     max(v for lv in (1, 3, 5, 7) for v in _level_model()["nrmse_in_band"][str(lv)]),
                     _budget()["draws"][0]["above_band_factor_needed"]]),
-    Figure(R, "The three draws' simulations averaged (one model of 54 states) reach 0.148", BUDGET,
+    Figure(S, "The three draws' simulations averaged (one model of 54 states) reach 0.148", BUDGET,
            lambda: [18 * len(_budget()["draws"]), _budget()["averaged"]["mean_nrmse"]]),
-    Figure(R, "Lines between the neighbouring levels put the 7.3 Hz mode at level 2 at 7.2902 Hz and 0.56 % "
+    Figure(S, "Lines between the neighbouring levels put the 7.3 Hz mode at level 2 at 7.2902 Hz and 0.56 % "
               "(measured: 7.2862 Hz, 0.51 %), which costs 0.056 / 0.076 / 0.078; one line over the four levels "
               "0.082 / 0.111 / 0.115, a parabola 0.072 / 0.097 / 0.100; the first draw's 7.2829 Hz and 0.48 % cost "
               "0.045 / 0.061 / 0.063", BUDGET,
@@ -1577,43 +1586,43 @@ FIGURES = [
                     _budget_cost(2, 7.3, "model draw 0")["frequency_hz"],
                     100 * _budget_cost(2, 7.3, "model draw 0")["damping"],
                     *_budget_cost(2, 7.3, "model draw 0")["nrmse"]]),
-    Figure(R, "The 9.16 Hz mode, measured 0.014 to 0.016 Hz above where every law puts it, costs 0.020 / 0.050 / "
+    Figure(S, "The 9.16 Hz mode, measured 0.014 to 0.016 Hz above where every law puts it, costs 0.020 / 0.050 / "
               "0.046 under the neighbouring lines", BUDGET,
            lambda: [_budget_mode(2, 9.16)["frequency_hz"],
                     *(f(_budget_mode(2, 9.16)["frequency_hz"] - _budget_cost(2, 9.16, law)["frequency_hz"]
                         for law in ("neighbours", "line", "parabola")) for f in (min, max)),
                     *_budget_cost(2, 9.16, "neighbours")["nrmse"]]),
-    Figure(R, "The modes' misses under the neighbouring lines alone leave 0.061 / 0.092 / 0.092 in the band at "
+    Figure(S, "The modes' misses under the neighbouring lines alone leave 0.061 / 0.092 / 0.092 in the band at "
               "level 2, and a model with no other error in the band would, with the first draw's error above it, "
               "reach 0.130 in the mean (a line over the levels: 0.140)", BUDGET,
            lambda: [*_budget()["interpolation_floor"]["neighbours"]["in_band"]["2"], 2,
                     _budget()["interpolation_floor"]["neighbours"]["mean_nrmse_with_above_band"],
                     _budget()["interpolation_floor"]["line"]["mean_nrmse_with_above_band"]]),
-    Figure(R, "linearised there (the branches' slopes at rest added to A), their spectral radius is 1.000105 and "
+    Figure(S, "linearised there (the branches' slopes at rest added to A), their spectral radius is 1.000105 and "
               "1.000013", BUDGET,
            lambda: [_budget()["draws"][0]["at_rest"]["radius"], _budget()["draws"][2]["at_rest"]["radius"]]),
-    Figure(R, "the first rings on at 0.077 / 0.096 / 0.104 of the level-1 response, the third at 0.015 / 0.019 / "
+    Figure(S, "the first rings on at 0.077 / 0.096 / 0.104 of the level-1 response, the third at 0.015 / 0.019 / "
               "0.020", BUDGET,
            lambda: [*_budget()["draws"][0]["at_rest"]["ringing_over_quietest"], 1,
                     *_budget()["draws"][2]["at_rest"]["ringing_over_quietest"]]),
-    Figure(R, "the same two draws then reach 0.172 and 0.165 (0.151 and 0.160 free), the second 0.151 as before",
+    Figure(S, "the same two draws then reach 0.172 and 0.165 (0.151 and 0.160 free), the second 0.151 as before",
            BUDGET,
            lambda: [_budget()["stable_at_rest"][0]["mean_nrmse"], _budget()["stable_at_rest"][2]["mean_nrmse"],
                     _budget()["draws"][0]["mean_nrmse"], _budget()["draws"][2]["mean_nrmse"],
                     _budget()["stable_at_rest"][1]["mean_nrmse"]]),
-    Figure(R, "fitted from the seeds 0 to 4, reach 0.151 to 0.163 on the test levels, and the first four 0.236 to "
+    Figure(S, "fitted from the seeds 0 to 4, reach 0.151 to 0.163 on the test levels, and the first four 0.236 to "
               "0.254 on the test levels' sweeps", AVERAGED,
            lambda: [*(int(row["model"]["random_state"]) for row in _averaged(False, "members")[::4]),
                     *(f(row["mean_nrmse"] for row in _averaged(False, "members")) for f in (min, max)),
                     *(f(row["mean_nrmse_sweeps"] for row in _averaged(False, "members")[:4]) for f in (min, max))]),
-    Figure(R, "the mean of the first two 0.146 and 0.227, in 349 s, of the first three 0.148 and 0.218, in 494 s",
+    Figure(S, "the mean of the first two 0.146 and 0.227, in 349 s, of the first three 0.148 and 0.218, in 494 s",
            AVERAGED, lambda: [_averaged(False)[k][key] for k in (1, 2)
                               for key in ("mean_nrmse", "mean_nrmse_sweeps", "fit_s")]),
-    Figure(R, "the fifth member, unstable at rest (radius 1.000261), goes on ringing by itself once the level-6 sweep "
+    Figure(S, "the fifth member, unstable at rest (radius 1.000261), goes on ringing by itself once the level-6 sweep "
               "has excited it, and misses the sweeps by 8.90 in the mean, the five members' mean by 1.88", AVERAGED,
            lambda: [_averaged(False, "members")[4]["radius_at_rest"], 6,
                     _averaged(False, "members")[4]["mean_nrmse_sweeps"], _averaged(False)[4]["mean_nrmse_sweeps"]]),
-    Figure(R, "the members reach 0.151 to 0.172 (sweeps 0.225 to 0.298), every one stable at rest (the fifth only "
+    Figure(S, "the members reach 0.151 to 0.172 (sweeps 0.225 to 0.298), every one stable at rest (the fifth only "
               "just: radius 0.9999999993), and their mean 0.155 from two members on, and 0.231 on the sweeps with "
               "five, in 773 s", AVERAGED,
            lambda: [*(f(row[key] for row in _averaged(True, "members"))
@@ -1628,29 +1637,29 @@ FIGURES = [
                     _averaged(False)[0]["mean_nrmse_sweeps"], _averaged(False)[1]["mean_nrmse_sweeps"],
                     _averaged(False, "members")[4]["mean_nrmse_sweeps"], _averaged(False)[4]["mean_nrmse_sweeps"],
                     _averaged(True)[4]["mean_nrmse_sweeps"]]),
-    Figure(R, "`AboveBandRegressor(clearances=(0.5, 1.0, 1.5))`", CLEARANCES,
+    Figure(S, "`AboveBandRegressor(clearances=(0.5, 1.0, 1.5))`", CLEARANCES,
            lambda: _results("f16_clearances")["clearances"]),
-    Figure(R, "with the ridge chosen on held-out estimation levels 3 and 5 among 1e-3, 1e-2 and 1e-1 (`alpha=(1e-3, "
+    Figure(S, "with the ridge chosen on held-out estimation levels 3 and 5 among 1e-3, 1e-2 and 1e-1 (`alpha=(1e-3, "
               "1e-2, 1e-1)` and `cv` holding out each level's multisine and sweep; `alpha_=0.1` on every draw",
            CLEARANCES,
            lambda: [*_results("f16_clearances")["held_out_levels"], *_results("f16_clearances")["hinge_alphas"],
                     *_results("f16_clearances")["hinge_alphas"],
                     _one_figure([_clearances(seed, HINGES)["model"]["alpha"] for seed in (0, 1, 2)], 3)]),
-    Figure(R, "they take the test multisines to 0.149 / 0.148 / 0.156, against 0.151 / 0.151 / 0.160 with the gated "
+    Figure(S, "they take the test multisines to 0.149 / 0.148 / 0.156, against 0.151 / 0.151 / 0.160 with the gated "
               "filters fitted on the multisines alone and 0.156 / 0.156 / 0.163 with them fitted on both waveforms, "
               "and the test levels' sweeps to 0.218 / 0.239 / 0.235, against 0.236 / 0.254 / 0.250 and 0.225 / 0.244 "
               "/ 0.240", CLEARANCES,
            lambda: [_clearances(seed, route)[key] for key in ("mean_nrmse", "mean_nrmse_sweeps")
                     for route in (HINGES, GATED_FILTERS, GATED_SWEEPS) for seed in (0, 1, 2)]),
-    Figure(R, "Level 2, where the joint does not knock, keeps its figures; level 6 gains at the drive point and on "
+    Figure(S, "Level 2, where the joint does not knock, keeps its figures; level 6 gains at the drive point and on "
               "the wing (0.127 / 0.109 / 0.289 on the first draw, against 0.133 / 0.119 / 0.297)", CLEARANCES,
            lambda: [2 if _clearances(0, HINGES)["nrmse"]["2"] == pytest.approx(
                         _clearances(0, GATED_FILTERS)["nrmse"]["2"], abs=5e-4) else math.nan,
                     6, *_clearances(0, HINGES)["nrmse"]["6"], *_clearances(0, GATED_FILTERS)["nrmse"]["6"]]),
-    Figure(R, "They cost 22372 coefficients and 41 s of fitting on the first draw, for seven solves of the filters "
+    Figure(S, "They cost 22372 coefficients and 41 s of fitting on the first draw, for seven solves of the filters "
               "(six held out)", CLEARANCES,
            lambda: [_clearances(0, HINGES)["n_above_band_params"], _clearances(0, HINGES)["map_fit_s"]]),
-    Figure(R, "The mean of the first two draws' models reaches 0.143 on the test multisines and 0.211 on the sweeps, "
+    Figure(S, "The mean of the first two draws' models reaches 0.143 on the test multisines and 0.211 on the sweeps, "
               "in 493 s of fitting (level 6: 0.122 / 0.102 / 0.283, the drive point below the deep LRU's 0.134, the "
               "wing and the payload above its 0.099 and 0.237); of all three, 0.144 and 0.202 in 693 s", CLEARANCES,
            lambda: [_clearances_mean(2, HINGES)["mean_nrmse"], _clearances_mean(2, HINGES)["mean_nrmse_sweeps"],
@@ -1658,10 +1667,10 @@ FIGURES = [
                     *next(v["level 6"] for v in _results("f16_clearances")["published"].values() if "level 6" in v),
                     _clearances_mean(3, HINGES)["mean_nrmse"], _clearances_mean(3, HINGES)["mean_nrmse_sweeps"],
                     _clearances_mean(3, HINGES)["fit_s"]]),
-    Figure(R, "gives the output above 15.5 Hz through three residual layers of 64 linear recurrent units (stable "
+    Figure(S, "gives the output above 15.5 Hz through three residual layers of 64 linear recurrent units (stable "
               "complex first-order recursions) between 32 channels", LRU,
            lambda: [_lru(0)["model"]["cutoff_hz"], _lru(0)["model"]["n_modes"], _lru(0)["model"]["width"]]),
-    Figure(R, "fitted side by side on the two cores (`AveragedRegressor`: 82 to 99 s with the linear start, the four "
+    Figure(S, "fitted side by side on the two cores (`AveragedRegressor`: 82 to 99 s with the linear start, the four "
               "starts in threads, each with BLAS on one thread, in single precision above 512 parameters: a member whose "
               "fit ends early leaves its core to the other, where with each member's starts in turn the first draw took "
               "100 s, one member ending 54 s into the members' 90 s; two single-start fits of degree 5 take 44 s that "
@@ -1672,82 +1681,82 @@ FIGURES = [
                     objective.SINGLE_PRECISION_PARAMS, 100, 54, 90, 5,
                     _results("side_by_side")["ways"]["single_precision"]["fit_s"],
                     _results("side_by_side")["ways"]["blas_in_each"]["fit_s"]]),
-    Figure(R, "An iteration of one network takes 0.401 s on the two cores and of two side by side 0.515 s, where the "
+    Figure(S, "An iteration of one network takes 0.401 s on the two cores and of two side by side 0.515 s, where the "
               "products with the weights alone (16.3 GFlop) take 0.294 s on one core at the machine's "
               "single-precision BLAS rate (`benchmarks/bench_lru_iteration.py`): a layer of 32 channels", LRU_ITER,
            lambda: [_results("lru_iteration")["iteration_s"],
                     _results("lru_iteration")["iteration_of_two_side_by_side_s"],
                     _results("lru_iteration")["product_gflop"], _results("lru_iteration")["products_alone_s"],
                     _results("lru_iteration")["network"]["width"]]),
-    Figure(R, "a fifth of an iteration (0.606 s for the pair at commit c377d7b, the same losses bit for bit)",
+    Figure(S, "a fifth of an iteration (0.606 s for the pair at commit c377d7b, the same losses bit for bit)",
            "bench_lru_iteration.py: lru_iteration.json at commit c377d7b", lambda: [0.606]),
-    Figure(R, "One such draw takes 236 to 245 s (the networks 143 to 157 s, 300 iterations; the first draw's times "
+    Figure(S, "One such draw takes 236 to 245 s (the networks 143 to 157 s, 300 iterations; the first draw's times "
               "hold the compilation). The four draws reach 0.137, 0.131, 0.128 and 0.132 on the test multisines "
               "(level 6: 0.109 / 0.102 / 0.214 on the first, 0.110 / 0.101 / 0.212 on the last)", LRU,
            lambda: [min(_lru(k)["fit_s"] for k in range(4)), max(_lru(k)["fit_s"] for k in range(4)),
                     min(_lru(k)["network_fit_s"] for k in range(4)), max(_lru(k)["network_fit_s"] for k in range(4)),
                     _lru(0)["model"]["max_iter"], *(_lru(k)["mean_nrmse"] for k in range(4)),
                     6, *_lru(0)["nrmse"]["6"], *_lru(3)["nrmse"]["6"]]),
-    Figure(R, "which the networks above it do not reach (they take 0.042 to 0.046 off each draw)", LRU,
+    Figure(S, "which the networks above it do not reach (they take 0.042 to 0.046 off each draw)", LRU,
            lambda: [min(_lru(k, False)["mean_nrmse"] - _lru(k)["mean_nrmse"] for k in range(4)),
                     max(_lru(k, False)["mean_nrmse"] - _lru(k)["mean_nrmse"] for k in range(4))]),
-    Figure(R, "the first two reach 0.128 (level 6: 0.105 / 0.097 / 0.204, every output below the deep LRU's 0.134 / "
+    Figure(S, "the first two reach 0.128 (level 6: 0.105 / 0.097 / 0.204, every output below the deep LRU's 0.134 / "
               "0.099 / 0.237), fitted in 475 s (the first draw's compilation included), the next two 0.126 (level 6: "
               "0.106 / 0.097 / 0.205) in 474 s: the accuracy and time targets met on both pairs", LRU,
            lambda: [_lru_pair(0)["mean_nrmse"], 6, *_lru_pair(0)["nrmse"]["6"], *_f16_lru_level_6(),
                     _lru_pair(0)["fit_s"], _lru_pair(1)["mean_nrmse"], 6, *_lru_pair(1)["nrmse"]["6"],
                     _lru_pair(1)["fit_s"]]),
-    Figure(R, "The same models took 592 to 605 s for the first pair in the three runs before the networks' workspace "
+    Figure(S, "The same models took 592 to 605 s for the first pair in the three runs before the networks' workspace "
               "(commits 49749ab, cfc4c06 and b2128b0), one of them over the budget",
            "f16_lru.json at commits 49749ab, cfc4c06 and b2128b0", lambda: [592, 605, 49749]),
-    Figure(R, "the first two draws' networks in another fifth digit (0.13677 and 0.13054 against 0.13676 and 0.13051 "
+    Figure(S, "the first two draws' networks in another fifth digit (0.13677 and 0.13054 against 0.13676 and 0.13051 "
               "here)", LRU + "; f16_lru.json at commit 1587a1c",
            lambda: [0.13677, 0.13054, _lru(0)["mean_nrmse"], _lru(1)["mean_nrmse"]]),
-    Figure(R, "All four draws together reach 0.125", LRU, lambda: [_lru_pair(2)["mean_nrmse"]]),
-    Figure(R, "whose `best` it is: 0.128 (level 6: 0.106 / 0.097 / 0.204; the sweeps 0.197), fitted in 540 s on a "
+    Figure(S, "All four draws together reach 0.125", LRU, lambda: [_lru_pair(2)["mean_nrmse"]]),
+    Figure(S, "whose `best` it is: 0.128 (level 6: 0.106 / 0.097 / 0.204; the sweeps 0.197), fitted in 540 s on a "
               "slower day of the machine", F16 + " --lru-draws 0 1 --keep-rows",
            lambda: [_f16_best()["mean_nrmse"], 6, *_f16_best()["nrmse"]["6"], _f16_best()["mean_nrmse_sweeps"],
                     _f16_best()["fit_s"]]),
-    Figure(R, "Two more pairs of seeds with that code (`f16_lru.py --draws 4 5 6 7 --output "
+    Figure(S, "Two more pairs of seeds with that code (`f16_lru.py --draws 4 5 6 7 --output "
               "benchmarks/results/f16_lru_draws_4_to_7.json`: members seeded 8 to 15, never looked at before) reach "
               "0.1296 and 0.1299 (level 6: 0.108 / 0.099 / 0.207 and 0.107 / 0.098 / 0.206), fitted in 463 and 467 s",
            "f16_lru.py --draws 4 5 6 7: f16_lru_draws_4_to_7.json",
            lambda: [4, 5, 6, 7, 8, 15, _lru_pair_4_to_7(0)["mean_nrmse"], _lru_pair_4_to_7(1)["mean_nrmse"],
                     6, *_lru_pair_4_to_7(0)["nrmse"]["6"], *_lru_pair_4_to_7(1)["nrmse"]["6"],
                     _lru_pair_4_to_7(0)["fit_s"], _lru_pair_4_to_7(1)["fit_s"]]),
-    Figure(R, "the four draws together reach 0.128", "f16_lru.py --draws 4 5 6 7: f16_lru_draws_4_to_7.json",
+    Figure(S, "the four draws together reach 0.128", "f16_lru.py --draws 4 5 6 7: f16_lru_draws_4_to_7.json",
            lambda: [_lru_pair_4_to_7(2)["mean_nrmse"]]),
-    Figure(R, "(the pair 0.12824 against 0.12819): since commit 241d9d6 the decoupled Jacobian in single precision, "
+    Figure(S, "(the pair 0.12824 against 0.12819): since commit 241d9d6 the decoupled Jacobian in single precision, "
               "which the members take above 512 parameters", F16 + "; " + LRU + "; the code's constant",
            lambda: [_f16_best()["mean_nrmse"], _lru_pair(0)["mean_nrmse"], 241, objective.SINGLE_PRECISION_PARAMS]),
-    Figure(R, "The members' settings were chosen on the spread of the model of the band over 16 seeds", SPREAD,
+    Figure(S, "The members' settings were chosen on the spread of the model of the band over 16 seeds", SPREAD,
            lambda: [len(_spread()["members"])]),
-    Figure(R, "`--member degree=5 --member n_init=1` for the earlier members", "the script's option", lambda: [5, 1]),
-    Figure(R, "`--no-check-outputs` for the members fitted without the sweeps' outputs", "the script's option",
+    Figure(S, "`--member degree=5 --member n_init=1` for the earlier members", "the script's option", lambda: [5, 1]),
+    Figure(S, "`--no-check-outputs` for the members fitted without the sweeps' outputs", "the script's option",
            lambda: []),
-    Figure(R, "a set of four cubic members, each the better of two starts, scores 0.162 to 0.183 (median 0.174; the "
+    Figure(S, "a set of four cubic members, each the better of two starts, scores 0.162 to 0.183 (median 0.174; the "
               "first two draws' 0.174), where fifth-degree members from one start each, the members of the earlier "
               "runs, score 0.166 to 0.190 (median 0.177)", SPREAD + "; " + SPREAD_DEGREE5,
            lambda: [_spread()["every_set_of_four"]["min"], _spread()["every_set_of_four"]["max"],
                     _spread()["every_set_of_four"]["median"], _spread()["pairs_of_draws"][0]["mean_nrmse"],
                     _spread("_degree5")["every_set_of_four"]["min"], _spread("_degree5")["every_set_of_four"]["max"],
                     _spread("_degree5")["every_set_of_four"]["median"]]),
-    Figure(R, "At the networks' 0.042 to 0.046, a pair of draws at the median lands near 0.131", LRU + "; " + SPREAD,
+    Figure(S, "At the networks' 0.042 to 0.046, a pair of draws at the median lands near 0.131", LRU + "; " + SPREAD,
            lambda: [min(_lru(k, False)["mean_nrmse"] - _lru(k)["mean_nrmse"] for k in range(4)),
                     max(_lru(k, False)["mean_nrmse"] - _lru(k)["mean_nrmse"] for k in range(4)),
                     _spread()["every_set_of_four"]["median"]
                     - statistics.mean(_lru(k, False)["mean_nrmse"] - _lru(k)["mean_nrmse"] for k in range(4))]),
-    Figure(R, "scores 0.200 in the median against 0.186, as 2 of the 16 cubic members miss a sweep by more than its "
+    Figure(S, "scores 0.200 in the median against 0.186, as 2 of the 16 cubic members miss a sweep by more than its "
               "output (below) and 1 of the 16 fifth-degree ones", SPREAD_NO + "; " + SPREAD_DEGREE5,
            lambda: [_spread(NO)["every_set_of_four_on_estimation_sweeps"]["median"],
                     _spread("_degree5")["every_set_of_four_on_estimation_sweeps"]["median"],
                     _jumpers(_spread(NO)), len(_spread(NO)["members"]), _jumpers(_spread("_degree5")),
                     len(_spread("_degree5")["members"])]),
-    Figure(R, "The pairs score 0.197 and 0.223 on the test levels' sweeps from rest (the second 0.320 before), "
+    Figure(S, "The pairs score 0.197 and 0.223 on the test levels' sweeps from rest (the second 0.320 before), "
               "where the fifth-degree members' pairs scored 0.193 and 0.215", LRU + "; before: " + CFC4C06
            + "; the fifth-degree pairs: " + B55F8AD,
            lambda: [_lru_pair(0)["mean_nrmse_sweeps"], _lru_pair(1)["mean_nrmse_sweeps"], 0.320, 0.193, 0.215]),
-    Figure(R, "seeds 6, 8 and 9 then keep earlier iterates, and none of the 16 members misses a sweep by more than its "
+    Figure(S, "seeds 6, 8 and 9 then keep earlier iterates, and none of the 16 members misses a sweep by more than its "
               "output (a set of four scores 0.181 in the median there, no longer on data that chose nothing), for "
               "0.001 more in the median on the test multisines", SPREAD + "; " + SPREAD_NO,
            lambda: [*(a["seed"] for a, b in zip(_spread()["members"], _spread(NO)["members"])
@@ -1755,14 +1764,14 @@ FIGURES = [
                     len(_spread()["members"]) if _jumpers(_spread()) == 0 else math.nan,
                     _spread()["every_set_of_four_on_estimation_sweeps"]["median"],
                     _spread()["every_set_of_four"]["median"] - _spread(NO)["every_set_of_four"]["median"]]),
-    Figure(R, "In `f16_lru.py` that is the fourth draw (seeds 6 and 7): its member keeps its 27th iterate of 50, and "
+    Figure(S, "In `f16_lru.py` that is the fourth draw (seeds 6 and 7): its member keeps its 27th iterate of 50, and "
               "its model of the band misses the test level 6's sweep by 0.229 / 0.244 / 0.386, where it missed it by "
               "0.71 / 1.13 / 1.07", "f16_lru.py's output (its warning); " + LRU + "; before: " + CFC4C06,
            lambda: [6, 7, 27, 50, 6, *_lru(3, False)["nrmse_sweeps"]["6"], 0.71, 1.13, 1.07]),
-    Figure(R, "the price is on the multisines, 0.132 for the draw instead of 0.126 and 0.126 for its pair instead of "
+    Figure(S, "the price is on the multisines, 0.132 for the draw instead of 0.126 and 0.126 for its pair instead of "
               "0.121", LRU + "; before: " + CFC4C06,
            lambda: [_lru(3)["mean_nrmse"], 0.126, _lru_pair(1)["mean_nrmse"], 0.121]),
-    Figure(R, "seed 6 misses the estimation sweeps of levels 5 and 7 by 3.91 and 1.73 in the band (the members that "
+    Figure(S, "seed 6 misses the estimation sweeps of levels 5 and 7 by 3.91 and 1.73 in the band (the members that "
               "do not fail, 0.08 to 0.61 on any level), inside the runaway bound: its excursion past the trusted range "
               "is 0.61 of the range's width on the level-5 sweep (the others' at most 0.015 there, but up to 0.36 on "
               "level 7's)", SPREAD_NO,
@@ -1772,33 +1781,33 @@ FIGURES = [
                     _spread(NO)["members"][6]["estimation_sweeps_excursion"]["5"], 5,
                     max(m["estimation_sweeps_excursion"]["5"] for m in _spread(NO)["members"] if m["seed"] != 6),
                     max(m["estimation_sweeps_excursion"]["7"] for m in _spread(NO)["members"] if m["seed"] != 6), 7]),
-    Figure(R, "A tighter bound would not tell the jump either: a fifth-degree member goes 0.98 of the width past on "
+    Figure(S, "A tighter bound would not tell the jump either: a fifth-degree member goes 0.98 of the width past on "
               "the level-7 sweep and misses it by only 0.36", SPREAD_DEGREE5,
            lambda: [max(m["estimation_sweeps_excursion"]["7"] for m in _spread("_degree5")["members"]), 7,
                     statistics.mean(max(_spread("_degree5")["members"],
                                         key=lambda m: m["estimation_sweeps_excursion"]["7"])
                                     ["estimation_sweeps_in_band"]["7"])]),
-    Figure(R, "Seed 9, unstable at rest (radius 1.0004), oscillates by itself on the level-1 sweep (4.08), inside its "
+    Figure(S, "Seed 9, unstable at rest (radius 1.0004), oscillates by itself on the level-1 sweep (4.08), inside its "
               "range", SPREAD_NO,
            lambda: [9, _spread(NO)["members"][9]["radius_at_rest"], 1, _sweep_miss(9, "1", NO)
                     if _spread(NO)["members"][9]["estimation_sweeps_excursion"]["1"] == 0 else math.nan]),
-    Figure(R, "Three draws of four have a member unstable at rest (the draws' largest radii 0.99996 to 1.00186)", LRU,
+    Figure(S, "Three draws of four have a member unstable at rest (the draws' largest radii 0.99996 to 1.00186)", LRU,
            lambda: [min(_lru(k)["radius_at_rest"] for k in range(4)) if sum(_lru(k)["radius_at_rest"] >= 1
                                                                             for k in range(4)) == 3 else math.nan,
                     max(_lru(k)["radius_at_rest"] for k in range(4))]),
-    Figure(R, "settles (within 200 periods)", "the model's rule",
+    Figure(S, "settles (within 200 periods)", "the model's rule",
            lambda: [importlib.import_module("sklearn_pnlss.statespace.model_base").MAX_STEADY_PERIODS]),
-    Figure(R, "one member's 32nd iterate did not settle on two of the four levels and its 24th was kept", B55F8AD
+    Figure(S, "one member's 32nd iterate did not settle on two of the four levels and its 24th was kept", B55F8AD
            + " (its warning)", lambda: [32, 24]),
-    Figure(R, "another's 50th ran away on the sweep of level 7 from rest (and on the test level 6's), and on none of "
+    Figure(S, "another's 50th ran away on the sweep of level 7 from rest (and on the test level 6's), and on none of "
               "the 40 new realisations", B55F8AD + " (its warning)",
            lambda: [50, 7, 6, importlib.import_module("sklearn_pnlss.statespace.new_inputs").N_NEW_INPUTS]),
-    Figure(R, "its 34th was kept: its draw's test sweeps scored 0.213 (1.82 unchecked) and the pair's 0.193 (0.961), "
+    Figure(S, "its 34th was kept: its draw's test sweeps scored 0.213 (1.82 unchecked) and the pair's 0.193 (0.961), "
               "the test multisines 0.124 both ways", B55F8AD + "; unchecked: the run of commit 204084f",
            lambda: [34, 0.213, 1.82, 0.193, 0.961, 0.124]),
-    Figure(R, "Here the checks keep an earlier iterate in one member of the third draw (its 48th of 50, on a check "
+    Figure(S, "Here the checks keep an earlier iterate in one member of the third draw (its 48th of 50, on a check "
               "record)", "f16_lru.py's output (its warning); " + LRU, lambda: [48, 50]),
-    Figure(R, "keeps its figures (0.098 / 0.125 / 0.131 on the first draw, the model alone the same)", LRU,
+    Figure(S, "keeps its figures (0.098 / 0.125 / 0.131 on the first draw, the model alone the same)", LRU,
            lambda: [*_lru(0)["nrmse"]["2"]] if [round(v, 3) for v in _lru(0)["nrmse"]["2"]]
            == [round(v, 3) for v in _lru(0, False)["nrmse"]["2"]] else [math.nan]),
     Figure(R, "| the mean of two draws, each the mean of two fits of that decoupled model with cubic branches, each "
@@ -1820,7 +1829,7 @@ FIGURES = [
                "iterations; its iterate 24 of 32 took the pair of draws it belonged to from failing the test level "
                "between two fitted ones to 0.132 in the mean", B55F8AD + " (its warning)",
            lambda: [24, 32, 0.132]),
-    Figure(R, "six layers of 100 states", "Forgione et al., CDC 2024, the case study", lambda: [None]),
+    Figure(S, "six layers of 100 states", "Forgione et al., CDC 2024, the case study", lambda: [None]),
     Figure(R, "It has 51 nonlinear parameters where the full model in the states and input has 90 "
               "(the states-only model above: 48)", "the models' structure",
            lambda: [_n_decoupled(3, 10), _n_nonlinear("states_inputs", (2, 3)), _n_nonlinear("states", (2, 3))]),
@@ -2417,7 +2426,7 @@ def test_quoted_figure_matches_its_source(figure):
 
 
 def test_every_figure_has_a_source():
-    """No figure in the prose of the README and the user guide without an
+    """No figure in the prose of the README, benchmarks/F16.md and the user guide without an
     entry in FIGURES (or in code that the tests run)."""
     unsourced = []
     for path in FIGURE_FILES:
@@ -2435,8 +2444,8 @@ def test_every_figure_has_a_source():
     assert not unsourced, "figures without a source (add them to FIGURES):\n" + "\n".join(unsourced)
 
 
-def test_the_f16_best_is_the_readme_row_and_was_fitted_within_ten_minutes():
-    """The README says f16_clearances.json keeps the mean of the first two
+def test_the_f16_best_is_the_quoted_row_and_was_fitted_within_ten_minutes():
+    """benchmarks/F16.md says f16_clearances.json keeps the mean of the first two
     draws with the hinges as its ``best``, with the fields the F-16 issue
     asks of a best entry."""
     best = _results("f16_clearances")["best"]
@@ -2446,7 +2455,7 @@ def test_the_f16_best_is_the_readme_row_and_was_fitted_within_ten_minutes():
 
 
 def test_the_f16_lru_best_is_the_first_pair_when_fitted_within_ten_minutes():
-    """The README says the results file keeps the mean of the first two
+    """benchmarks/F16.md says the results file keeps the mean of the first two
     draws with the networks above the band as its ``best`` only when it
     was fitted in under ten minutes (in the run committed it was, in 475
     s; three runs before the networks' workspace it was not), and that it is then the best F-16

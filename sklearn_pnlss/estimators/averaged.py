@@ -116,7 +116,7 @@ class AveragedRegressor(DynamicRegressorMixin, BaseEstimator):
     Notes
     -----
     Measured on the F-16 ground vibration test
-    (``benchmarks/f16_averaged.py``; figures in the README's F-16 section
+    (``benchmarks/f16_averaged.py``; figures in ``benchmarks/F16.md``
     and the user guide's decoupling page): the mean of two or three fits
     simulates the test levels and their sine sweeps better than one fit
     does, and a member unstable at rest spoils the mean on a sweep from

@@ -169,8 +169,8 @@ class LRUAboveBandRegressor(DynamicRegressorMixin, BaseEstimator):
     (``n_networks=2, n_jobs=2``) take the mean test NRMSE of the mean of
     two fits, each the better of two random starts (an
     :class:`AveragedRegressor`), from 0.170 - 0.180 to 0.128 - 0.137 over
-    four draws, fitted in 143 to 157 s on 2 cores (the README's F-16
-    section has the figures). An iteration
+    four draws, fitted in 143 to 157 s on 2 cores (``benchmarks/F16.md``
+    has the figures). An iteration
     passes each periodic signal's period and one segment of each other
     signal forward and back: about ``24 n_layers n_modes width`` flops a
     sample in products with the weights, so the fit grows with
