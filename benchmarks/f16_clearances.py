@@ -101,10 +101,6 @@ def held_out_splits(sweeps):
 def draw_rows(seed, start, start_s, X, y, train_sweeps, test):
     """The rows of one draw: the model alone, then each route above the
     band; and the fitted models of each route."""
-    from sklearn.frozen import FrozenEstimator
-
-    from sklearn_pnlss import AboveBandRegressor
-
     decoupled = bench_f16.decoupled_estimator(STATES, BRANCHES, DEGREE, branch_basis=BASIS, random_state=seed)
     t0 = time.perf_counter()
     decoupled.fit(start.transform(X), y)
@@ -113,28 +109,42 @@ def draw_rows(seed, start, start_s, X, y, train_sweeps, test):
     settings = {"n_states": STATES, "n_branches": BRANCHES, "degree": DEGREE, "branch_basis": BASIS,
                 "random_state": seed}
     rows, models = [bench_f16.entry(inside, settings, decoupled, test, fit_s)], {}
-    for route, (params, sweeps, choose_alpha) in ROUTES.items():
-        chosen = {"alpha": HINGE_ALPHAS, "cv": held_out_splits(sweeps)} if choose_alpha else {}
-        t0 = time.perf_counter()
-        wrapped = AboveBandRegressor(FrozenEstimator(decoupled), cutoff=bench_f16.BAND_EDGES[1], fs=400.0,
-                                     **params, **chosen).fit(*map_signals(X, y, train_sweeps, sweeps))
-        map_s = time.perf_counter() - t0
-        held_out = dict(zip(HINGE_ALPHAS, wrapped.cv_nrmse_.tolist())) if choose_alpha else {}
-        if held_out:
-            levels = " and ".join(map(str, HELD_OUT_LEVELS))
-            print(f"alpha chosen on held-out levels {levels}: {wrapped.alpha_} (mean NRMSE there: "
-                  + ", ".join(f"{k}: {v:.4f}" for k, v in held_out.items()) + ")", flush=True)
-        extra = {"n_params": int(decoupled.n_params_ + wrapped.n_map_params_),
-                 "n_above_band_params": int(wrapped.n_map_params_), "map_fit_s": map_s,
-                 "above_band_explained_train": wrapped.explained_fraction_.tolist(),
-                 **({"held_out_nrmse_by_alpha": {str(k): v for k, v in held_out.items()}} if held_out else {})}
-        named = {k: list(v) if isinstance(v, tuple) else v for k, v in params.items()}
-        rows.append(bench_f16.entry(f"AboveBandRegressor({inside}): {route}",
-                                    {**settings, "route": route, "train_sweeps": sweeps, "cutoff_hz": wrapped.cutoff,
-                                     "n_taps": wrapped.n_taps, "alpha": wrapped.alpha_, **named},
-                                    wrapped, test, fit_s + map_s, extra))
+    for route in ROUTES:
+        row, wrapped, map_s = route_row(route, inside, settings, decoupled, fit_s, X, y, train_sweeps, test)
+        rows.append(row)
         models[route] = (wrapped, fit_s - start_s + map_s)
     return rows, models
+
+
+def route_row(route, inside, settings, model, fit_s, X, y, train_sweeps, test):
+    """One of ROUTES fitted above the band of the fitted ``model`` (named
+    ``inside``, with its ``settings`` and fit time ``fit_s``): its row, the
+    fitted ``AboveBandRegressor`` and the map's own fit time."""
+    from sklearn.frozen import FrozenEstimator
+
+    from sklearn_pnlss import AboveBandRegressor
+
+    params, sweeps, choose_alpha = ROUTES[route]
+    chosen = {"alpha": HINGE_ALPHAS, "cv": held_out_splits(sweeps)} if choose_alpha else {}
+    t0 = time.perf_counter()
+    wrapped = AboveBandRegressor(FrozenEstimator(model), cutoff=bench_f16.BAND_EDGES[1], fs=400.0,
+                                 **params, **chosen).fit(*map_signals(X, y, train_sweeps, sweeps))
+    map_s = time.perf_counter() - t0
+    held_out = dict(zip(HINGE_ALPHAS, wrapped.cv_nrmse_.tolist())) if choose_alpha else {}
+    if held_out:
+        levels = " and ".join(map(str, HELD_OUT_LEVELS))
+        print(f"alpha chosen on held-out levels {levels}: {wrapped.alpha_} (mean NRMSE there: "
+              + ", ".join(f"{k}: {v:.4f}" for k, v in held_out.items()) + ")", flush=True)
+    extra = {"n_params": int(model.n_params_ + wrapped.n_map_params_),
+             "n_above_band_params": int(wrapped.n_map_params_), "map_fit_s": map_s,
+             "above_band_explained_train": wrapped.explained_fraction_.tolist(),
+             **({"held_out_nrmse_by_alpha": {str(k): v for k, v in held_out.items()}} if held_out else {})}
+    named = {k: list(v) if isinstance(v, tuple) else v for k, v in params.items()}
+    row = bench_f16.entry(f"AboveBandRegressor({inside}): {route}",
+                          {**settings, "route": route, "train_sweeps": sweeps, "cutoff_hz": wrapped.cutoff,
+                           "n_taps": wrapped.n_taps, "alpha": wrapped.alpha_, **named},
+                          wrapped, test, fit_s + map_s, extra)
+    return row, wrapped, map_s
 
 
 def averaged_rows(draw_models, start_s, test):

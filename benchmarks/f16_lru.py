@@ -3,7 +3,7 @@ linear recurrent units (``LRUAboveBandRegressor``), trained on the
 estimation levels' multisines and sine sweeps (issue 35).
 
     python benchmarks/f16_lru.py [--draws 0 1 2 3] [--single 0] [--network KEY=VALUE ...]
-        [--data-dir DIR] [--output FILE]
+        [--above-band networks|ROUTE] [--data-dir DIR] [--output FILE]
 
 The model of the band is a decoupled model
 (``DecoupledPNLSSRegressor(18, n_branches=3, degree=3,
@@ -32,6 +32,10 @@ of two members with one network each spread from 0.127 to 0.137);
 nothing else was chosen on the test levels. ``--network`` changes a setting
 of the networks (``LRUAboveBandRegressor``'s) to measure a variant on the
 same draws (``--draws 0 --network n_layers=1 --output /tmp/one_layer.json``).
+``--above-band`` puts one of ``f16_clearances.py``'s linear routes above
+the same models of the band instead of the networks (``--above-band "gated
+filters and hinges, with the sweeps"``): what the networks add, on the
+same members.
 
 Each row holds the test multisines' NRMSE (periodic steady state), the test
 levels' sine sweeps (from rest), the fit time (the BLA's, the model's and
@@ -53,13 +57,19 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import bench_f16  # noqa: E402
 from _bench_utils import RESULTS, header, setting_value, write_results  # noqa: E402
-from f16_clearances import (BASIS, BRANCHES, DEGREE, STATES, MeanOfMembers, load_and_start,  # noqa: E402
-                            map_signals)
+from f16_clearances import (BASIS, BRANCHES, DEGREE, ROUTES, STATES, MeanOfMembers, load_and_start,  # noqa: E402
+                            map_signals, route_row)
+
+# What ``--above-band`` puts above the model of the band by default; the other choices are f16_clearances.py's
+# linear routes.
+NETWORKS = "networks"
 
 
-def draw_rows(name, settings, model, start, start_s, X, y, train_sweeps, test, seed, network_settings=None):
+def draw_rows(name, settings, model, start, start_s, X, y, train_sweeps, test, seed, network_settings=None,
+              above=NETWORKS):
     """The rows of one draw (the model of the band alone, then with the
-    network above it) and the network's model with its own fit time."""
+    map ``above`` the band: the networks, or f16_clearances.py's route)
+    and that model with its own fit time."""
     from sklearn.frozen import FrozenEstimator
 
     from sklearn_pnlss import LRUAboveBandRegressor
@@ -70,6 +80,9 @@ def draw_rows(name, settings, model, start, start_s, X, y, train_sweeps, test, s
     model.fit(start.transform(X), y, X_check=[d.X[0] for d in train_sweeps], y_check=[d.y[0] for d in train_sweeps])
     model_s = time.perf_counter() - t0
     rows = [bench_f16.entry(name, settings, model, test, start_s + model_s)]
+    if above != NETWORKS:
+        row, wrapped, map_s = route_row(above, name, settings, model, start_s + model_s, X, y, train_sweeps, test)
+        return rows + [row], (wrapped, model_s + map_s)
     t0 = time.perf_counter()
     network = LRUAboveBandRegressor(FrozenEstimator(model), cutoff=bench_f16.BAND_EDGES[1], fs=400.0,
                                     n_networks=N_NETWORKS, n_jobs=N_NETWORKS, random_state=seed,
@@ -145,6 +158,8 @@ def main(argv=None):
                         help="the single fits' draws (the better of two starts)")
     parser.add_argument("--network", action="append", default=[], metavar="KEY=VALUE",
                         help="a setting of the networks (LRUAboveBandRegressor's), a Python literal or text")
+    parser.add_argument("--above-band", choices=[NETWORKS, *ROUTES], default=NETWORKS,
+                        help="above the band: the networks, or one of f16_clearances.py's linear routes")
     parser.add_argument("--output", default=RESULTS / "f16_lru.json")
     args = parser.parse_args(argv)
     network_settings = {k: setting_value(v) for k, v in (kv.split("=", 1) for kv in args.network)}
@@ -152,13 +167,14 @@ def main(argv=None):
     X, y, test, train_sweeps, start, start_s = load_and_start(args.data_dir)
     results = {**header(), "protocol": {"train_levels": bench_f16.TRAIN_LEVELS, "test_levels": bench_f16.TEST_LEVELS},
                "published": bench_f16.PUBLISHED, "start_s": start_s, "network_settings": network_settings,
+               "above_band": args.above_band,
                "draws": [], "single": [], "averages": []}
     members = {}
     for kind, seeds, model_of in (("draws", args.draws, averaged), ("single", args.single, single)):
         for seed in seeds:
             print(f"{kind}: draw {seed}", flush=True)
             rows, network = draw_rows(*model_of(seed), start, start_s, X, y, train_sweeps, test, seed,
-                                      network_settings)
+                                      network_settings, args.above_band)
             results[kind].append({"random_state": seed, "rows": rows})
             if kind == "draws":
                 members[seed] = network
@@ -169,7 +185,8 @@ def main(argv=None):
     groups = [seeds[i:i + 2] for i in range(0, len(seeds) - 1, 2)] + ([seeds] if len(seeds) > 2 else [])
     for chosen in groups:
         results["averages"].append(bench_f16.entry(
-            f"mean of draws {chosen}: LRUAboveBandRegressor", {"draws": chosen},
+            f"mean of draws {chosen}: " + ("LRUAboveBandRegressor" if args.above_band == NETWORKS else args.above_band),
+            {"draws": chosen},
             MeanOfMembers([members[s][0] for s in chosen]), test, start_s + sum(members[s][1] for s in chosen)))
     results["best"] = bench_f16.best_within_budget(results["averages"][:1] or [
         row for kind in ("draws", "single") for d in results[kind] for row in d["rows"]])
