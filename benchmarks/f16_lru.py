@@ -173,11 +173,11 @@ def main(argv=None):
     for kind, seeds, model_of in (("draws", args.draws, averaged), ("single", args.single, single)):
         for seed in seeds:
             print(f"{kind}: draw {seed}", flush=True)
-            rows, network = draw_rows(*model_of(seed), start, start_s, X, y, train_sweeps, test, seed,
-                                      network_settings, args.above_band)
+            rows, fitted = draw_rows(*model_of(seed), start, start_s, X, y, train_sweeps, test, seed,
+                                     network_settings, args.above_band)
             results[kind].append({"random_state": seed, "rows": rows})
             if kind == "draws":
-                members[seed] = network
+                members[seed] = fitted
             write_results(results, args.output)
     seeds = list(members)
     # The model of the protocol: the mean of two draws (four members, four networks), scored on each pair of
