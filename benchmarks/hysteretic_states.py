@@ -22,8 +22,9 @@ stiffen, two of them make Bouc-Wen's loops. Parameters: the linear ones,
 ``W``, ``V`` and two constants per hysteretic state. The output reads the
 linear states only (a displacement sensor). Written instead as the
 hysteretic states' rows of one state matrix (``z(t+1) = H(z, (A xi + B
-u)_z - z)``, the same models), and with the output reading ``z`` too, the
-fits found the training noise's level on one draw of six, not six.
+u)_z - z)``, the same models, the same starts), the fits reached the
+training noise on two draws of six (0 and 3), not six; with the output
+reading ``z`` too, not on draw 0.
 
 Start: the BLA of ``n`` states (``BLAEstimator``), one hysteretic state
 that tracks its output exactly (``z = C x``) and feeds the states through
