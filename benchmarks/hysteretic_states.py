@@ -169,6 +169,7 @@ def fit_draw(seed, official, n_states, n_starts):
 
     from sklearn_pnlss import BLAEstimator
     from sklearn_pnlss.datasets import make_bouc_wen
+    from sklearn_pnlss.metrics import rms_error
 
     t0 = time.perf_counter()
     data = make_bouc_wen(n_realizations=2, n_periods=2, random_state=seed)
@@ -189,12 +190,8 @@ def fit_draw(seed, official, n_states, n_starts):
     multisine = np.tile(official.X_test_multisine[0] / u_scale, (STEADY_PERIODS + 1, 1))
     y_ms = simulate(*blocks, multisine)[-PERIOD:, 0] * y_scale
     y_sw = simulate(*blocks, np.ascontiguousarray(official.X_test_sweep[0] / u_scale))[:, 0] * y_scale
-
-    def db(e):
-        return float(20 * np.log10(np.sqrt(np.mean(e**2))))
-
-    return {"seed": seed, "db_multisine": db(y_ms - official.y_test_multisine[0, :, 0]),
-            "db_sweep": db(y_sw - official.y_test_sweep[0, :, 0]),
+    return {"seed": seed, "db_multisine": float(rms_error(official.y_test_multisine[0, :, 0], y_ms, db=True)),
+            "db_sweep": float(rms_error(official.y_test_sweep[0, :, 0], y_sw, db=True)),
             "train_rms_m": float(np.sqrt(np.mean(best.fun**2)) * y_scale), "n_params": int(best.x.size),
             "constants": blocks[6].tolist(), "starts_cost": sorted(float(2 * f.cost) for f in fits),
             "fit_s": time.perf_counter() - t0}
