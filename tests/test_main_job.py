@@ -32,6 +32,16 @@ def test_main_job_with_default_settings(tmp_path):
     assert rows["decoupled"]["n_params"] == 67
     assert rows["decoupled"]["multisine_db"] < -93 and rows["decoupled"]["sweep_db"] < -100
     assert "diverged" not in out.stdout
+    # the 3-state BLA: one mode, and a real pole given as a time constant, not as a mode of 100 % damping
+    assert "% damping); real poles: time constant" in out.stdout and "100.00 %" not in out.stdout
+
+
+def test_bla_poles_in_words():
+    from sklearn_pnlss.app.cli import _bla_poles
+
+    assert _bla_poles([6.75, 40.3], [1.0, 0.0988]) == (
+        "BLA modes: 40.30 Hz (9.88 % damping); real poles: time constant 23.6 ms")
+    assert _bla_poles([0.0], [1.0]) == "BLA modes: none; real poles: an integrator"
 
 
 def test_main_job_with_branches_in_signed_powers(tmp_path):

@@ -3,6 +3,7 @@
 diagnosis demo (:func:`~sklearn_pnlss.app.gap_demo.run_gap_demo`); ``--help``
 lists the options."""
 import argparse
+import math
 from pathlib import Path
 
 from .study import MODELS, format_grid, format_table, run_study
@@ -89,13 +90,20 @@ def main(argv=None):
         print("\nDecoupled model selection (validation realisation):")
         print(grid)
     if "bla" in summary:
-        b = summary["bla"]
-        print(
-            "BLA modes: "
-            + ", ".join(f"{f:.2f} Hz ({100 * z:.2f} %)" for f, z in zip(b["natural_frequencies_hz"], b["damping_ratios"]))
-        )
+        print(_bla_poles(summary["bla"]["natural_frequencies_hz"], summary["bla"]["damping_ratios"]))
     print(_wrote(summary["files"], args.output_dir))
     return 0
+
+
+def _bla_poles(frequencies, damping):
+    """The BLA's poles in words: its modes (complex pairs) by frequency
+    and damping, its real poles by time constant, which a damping of 100 %
+    would pass off as a mode."""
+    modes = [f"{f:.2f} Hz ({100 * z:.2f} % damping)" for f, z in zip(frequencies, damping) if z < 1 - 1e-9]
+    real = [f"time constant {1e3 / (2 * math.pi * f):.1f} ms" if f > 0 else "an integrator"
+            for f, z in zip(frequencies, damping) if z >= 1 - 1e-9]
+    line = "BLA modes: " + (", ".join(modes) or "none")
+    return line + (f"; real poles: {', '.join(real)}" if real else "")
 
 
 def _wrote(files, folder):
