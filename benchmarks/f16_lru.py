@@ -162,6 +162,8 @@ def main(argv=None):
                         help="above the band: the networks, or one of f16_clearances.py's linear routes")
     parser.add_argument("--output", default=RESULTS / "f16_lru.json")
     args = parser.parse_args(argv)
+    if args.network and args.above_band != NETWORKS:
+        parser.error(f"--network sets the networks, which --above-band {args.above_band!r} replaces; drop one of them")
     network_settings = {k: setting_value(v) for k, v in (kv.split("=", 1) for kv in args.network)}
 
     X, y, test, train_sweeps, start, start_s = load_and_start(args.data_dir)
