@@ -347,3 +347,26 @@ def test_simulation_continues_the_branches_past_their_range(linear, signed):
     Y, _ = model.simulate(U)
     assert left > 100  # the continuation is what is tested
     np.testing.assert_allclose(Y, np.array(Y_ref), rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("splines", [False, True])
+def test_branches_over_the_states_alone_hold_the_input_rows_of_v(splines):
+    """``input_directions=False``: the input rows of V are zero and no step
+    moves them (the step basis leaves their columns out), and they are not
+    counted as parameters."""
+    rng = np.random.default_rng(5)
+    model = _random_model(rng, n=3, m=2, p=1, r=2, d=6)
+    V = model.V.copy()
+    V[3:] = 0.0
+    knots = np.array([[-2.0, 0.5], [-2.0, 0.5]]) if splines else None
+    held = DecoupledModel(model.A, model.B, model.C, model.D, model.Wx, model.Wy, V, model.G, knots=knots,
+                          input_directions=False)
+    assert held.n_fixed_params == 4 and held.n_nonlinear_params == model.n_nonlinear_params - 4
+    basis = held.step_basis(rng.standard_normal((50, 5)))
+    assert basis.shape == (held.n_params, held.n_params - 4)
+    step = basis @ rng.standard_normal(basis.shape[1])
+    moved = held.with_theta(held.theta + step)
+    assert not moved.V[3:].any() and moved.V[:3].all()
+    with pytest.raises(ValueError, match="input rows of V must be zero"):
+        DecoupledModel(model.A, model.B, model.C, model.D, model.Wx, model.Wy, model.V, model.G,
+                       input_directions=False)

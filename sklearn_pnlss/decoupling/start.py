@@ -164,7 +164,7 @@ def decoupled_start(pnlss_model, states_inputs, n_branches, degree, *, n_points=
 
 
 def random_branches_start(linear_model, states_inputs, n_branches, degree, *, n_knots=None, signed=False,
-                          random_state=None):
+                          input_directions=True, random_state=None):
     """Decoupled model that equals a linear model, with random branches ready
     to grow.
 
@@ -194,6 +194,9 @@ def random_branches_start(linear_model, states_inputs, n_branches, degree, *, n_
     signed : bool, default=False
         Polynomial branches in signed powers ``z |z| ** k`` (the same
         coefficients on the signed basis).
+    input_directions : bool, default=True
+        False: directions over the states alone (the input rows of ``V``
+        zero, held so by the fit).
     random_state : int, RandomState, Generator or None, default=None
         Controls the directions and the branches' coefficients.
 
@@ -216,6 +219,8 @@ def random_branches_start(linear_model, states_inputs, n_branches, degree, *, n_
         )
     rng = random_state if isinstance(random_state, np.random.Generator) else check_random_state(random_state)
     V = rng.standard_normal((n + m, n_branches))
+    if not input_directions:
+        V[n:] = 0.0
     rms = np.sqrt(np.mean((states_inputs @ V) ** 2, axis=0))
     V /= np.where(rms > 0, rms, 1.0)
     powers = np.arange(1, degree + 1)
@@ -229,4 +234,5 @@ def random_branches_start(linear_model, states_inputs, n_branches, degree, *, n_
     return DecoupledModel(
         A=A.copy(), B=B.copy(), C=C.copy(), D=D.copy(), Wx=np.zeros((n, n_branches)),
         Wy=np.zeros((p, n_branches)), V=np.ascontiguousarray(V), G=G, knots=knots, signed=signed,
+        input_directions=input_directions,
     )

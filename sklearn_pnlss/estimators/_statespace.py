@@ -142,7 +142,7 @@ class StateSpaceRegressorBase(SignalRegressorBase):
         objectives = simulation_objectives(start, X_list, y_list, settings, weights)
         self._set_fit_result(self._fit_from_start(start, objectives, settings, val, X_list))
         self._export(X_list)
-        self.n_params_ = self.model_.n_params
+        self.n_params_ = self.model_.n_params - self.model_.normalised.n_fixed_params
         self.n_nonlinear_params_ = self.model_.n_nonlinear_params
         return self
 

@@ -72,6 +72,11 @@ class DecoupledModel(StateSpaceModel):
         amplitude dependence of friction, clearance and hysteresis (a term
         ``z |z|`` shifts a mode's frequency in proportion to the amplitude,
         ``z ** 3`` to its square). Not with ``knots``.
+    input_directions : bool, default=True
+        Whether the input rows of ``V`` are parameters. False: the branches
+        read the states alone (those rows held at zero, steps never move
+        them), as when the physics says the input enters linearly (a
+        force on a drive, a pump's flow into a tank).
 
     Notes
     -----
@@ -93,6 +98,7 @@ class DecoupledModel(StateSpaceModel):
     linear_extrapolation: bool = False
     knots: np.ndarray | None = None
     signed: bool = False
+    input_directions: bool = True
 
     def __post_init__(self):
         # ``copy`` of the base copies every field with np.copy; keep the flags
@@ -100,6 +106,7 @@ class DecoupledModel(StateSpaceModel):
         self.output_branches = bool(self.output_branches)
         self.linear_extrapolation = bool(self.linear_extrapolation)
         self.signed = bool(self.signed)
+        self.input_directions = bool(self.input_directions)
         n, m, p = self.A.shape[0], self.B.shape[1], self.C.shape[0]
         r, d = self.G.shape
         self.bounds = unbounded(r) if self.bounds is None else np.array(self.bounds, dtype=float)
@@ -119,6 +126,9 @@ class DecoupledModel(StateSpaceModel):
         for name, shape in expected.items():
             if getattr(self, name).shape != shape:
                 raise ValueError(f"{name} must have shape {shape}; got {getattr(self, name).shape}.")
+        if not self.input_directions and np.any(self.V[n:] != 0):
+            raise ValueError("With input_directions=False the input rows of V must be zero (the branches read the "
+                             "states alone); set V[n_states:] = 0.")
 
     @property
     def _block_names(self):
@@ -140,9 +150,22 @@ class DecoupledModel(StateSpaceModel):
 
     @property
     def n_nonlinear_params(self):
-        """Parameters of the branches: Wx, V and G, (2n + m + d) r, plus Wy
-        when ``output_branches``."""
-        return self.Wx.size + self.V.size + self.G.size + (self.Wy.size if self.output_branches else 0)
+        """Parameters of the branches: Wx, V and G, (2n + m + d) r (or (2n +
+        d) r without ``input_directions``), plus Wy when ``output_branches``."""
+        return (self.Wx.size + self.V.size - self.n_fixed_params + self.G.size
+                + (self.Wy.size if self.output_branches else 0))
+
+    @property
+    def n_fixed_params(self):
+        """Entries of the parameter vector held fixed: the input rows of V
+        without ``input_directions``."""
+        return 0 if self.input_directions else self.V.size - self.V[: self.n_states].size
+
+    def _fixed_columns(self):
+        """Places of the fixed entries in the parameter vector."""
+        n, r = self.n_states, self.n_branches
+        start = sum(getattr(self, name).size for name in self._block_names[: self._block_names.index("V")])
+        return start + n * r + np.arange(self.n_fixed_params)  # V row-major: its input rows come last
 
     def _rescaled_nonlinearity(self, state_scale, input_scale, output_scale):
         """Wx, Wy, V for :meth:`rescaled`: z = V_n^T s_n = V_n^T S^-1 s, so V
@@ -201,14 +224,17 @@ class DecoupledModel(StateSpaceModel):
         Spline coefficients are stepped as they are (each acts on four
         intervals only: they are well conditioned already).
 
+        Without ``input_directions`` the basis leaves out the fixed input
+        rows of V: the steps never move them.
+
         Returns
         -------
-        basis : ndarray of shape (n_params, n_params) or None
+        basis : ndarray of shape (n_params, n_params - n_fixed_params) or None
             Maps step coordinates to a step of ``theta`` (None: the
-            parameters themselves, for spline branches).
+            parameters themselves, for spline branches with every parameter free).
         """
         if self.splines:
-            return None
+            return None if self.input_directions else self._without_fixed(np.eye(self.n_params))
         reach = np.abs(self._variables_by_row(states_inputs)).max(axis=1)  # a branch a row
         reach[~(reach > 0)] = 1.0
         basis = np.eye(self.n_params)
@@ -218,7 +244,11 @@ class DecoupledModel(StateSpaceModel):
         for l, c in enumerate(reach):
             i = start + l * d
             basis[i : i + d, i : i + d] = legendre_in_powers / c**powers
-        return basis
+        return self._without_fixed(basis)
+
+    def _without_fixed(self, basis):
+        """``basis`` without the columns of the fixed parameters."""
+        return basis if self.input_directions else np.delete(basis, self._fixed_columns(), axis=1)
 
     def _branch_arguments(self):
         """What the kernels take to evaluate the branches: the trusted

@@ -197,9 +197,11 @@ def levenberg_marquardt(
         value): no descent direction is left.
     callback : callable (iteration, theta, cost, lam) or None
         Called after each iteration (progress, validation).
-    basis : ndarray of shape (n_params, n_params) or None
-        Invertible: each step is ``basis @ phi`` with ``phi`` solved from the
-        Jacobian ``J @ basis``. None: the identity.
+    basis : ndarray of shape (n_params, k) or None
+        Of full column rank: each step is ``basis @ phi`` with ``phi``
+        solved from the Jacobian ``J @ basis``; with fewer columns than
+        parameters (``k < n_params``), the steps stay in its range (held
+        parameters). None: the identity.
     damping : {"nielsen", "toolbox"}, default="nielsen"
         How the damping changes between steps: Nielsen's rule (see the
         module), or the PNLSS toolbox's (lambda halved on success,

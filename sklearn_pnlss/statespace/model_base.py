@@ -100,6 +100,12 @@ class StateSpaceModel:
         return sum(M.size for M in self.blocks)
 
     @property
+    def n_fixed_params(self):
+        """Entries of the parameter vector that no step moves (see
+        :meth:`step_basis`); not counted as the model's parameters."""
+        return 0
+
+    @property
     def n_null_directions(self):
         """Parameter directions that leave the output unchanged (dropped
         from each Levenberg-Marquardt step): the n^2 of the state basis."""
