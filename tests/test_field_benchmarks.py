@@ -136,3 +136,11 @@ def test_cascaded_tanks_decoupled_branches_over_the_states():
         assert 0.32 < err < 0.335  # V
         assert not model.V_[2:].any() and model.n_params_ == 25  # the pump's row of V held at zero
     assert test_error("states_inputs", 0)[1] > 0.5
+    # from the full polynomial in the states (the paper's start), its decomposition's directions over the states
+    cpd = make_pipeline(BLAEstimator(2, fs=0.25, offsets=True), DecoupledPNLSSRegressor(
+        2, n_branches=2, degree=3, n_init=1, output_branches=True, variables="states", max_iter=50, random_state=0))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        cpd.fit(data.X_train, data.y_train)
+    assert cpd[-1].start_model_.variables == "states" and not cpd[-1].V_[2:].any()
+    assert rms_error(data.y_test, cpd.predict(data.X_test, y_init=window), skip=data.skip) < 0.7
