@@ -131,9 +131,10 @@ class DecoupledPNLSSRegressor(StateSpaceRegressorBase):
     variables : {"states_inputs", "states"}, default="states_inputs"
         What the branches read, as :class:`PNLSSRegressor`'s ``variables``:
         ``[x; u]``, or the states alone (the input rows of ``V_`` held at
-        zero; the default full start is then a polynomial in the states),
-        when the physics says the input enters linearly: a pump's flow into
-        a tank, a force on a drive. On the cascaded tanks (two states, two
+        zero; the default full start is then a polynomial in the states,
+        and a start given with the input in its polynomial has the input
+        rows of its decomposition dropped), when the physics says the input
+        enters linearly: a pump's flow into a tank, a force on a drive. On the cascaded tanks (two states, two
         cubic branches in both equations, ``init="random"``) nine draws of
         its five random starts reach 0.331 to 0.333 V on the test record
         with the states alone, and 0.342 to 0.924 V with the input in the
