@@ -161,11 +161,14 @@ class DecoupledModel(StateSpaceModel):
         without ``input_directions``."""
         return 0 if self.input_directions else self.V.size - self.V[: self.n_states].size
 
+    def _block_start(self, name):
+        """Where block ``name`` starts in the parameter vector."""
+        return sum(getattr(self, block).size for block in self._block_names[: self._block_names.index(name)])
+
     def _fixed_columns(self):
         """Places of the fixed entries in the parameter vector."""
-        n, r = self.n_states, self.n_branches
-        start = sum(getattr(self, name).size for name in self._block_names[: self._block_names.index("V")])
-        return start + n * r + np.arange(self.n_fixed_params)  # V row-major: its input rows come last
+        # V row-major: its input rows come after its n state rows of r entries
+        return self._block_start("V") + self.n_states * self.n_branches + np.arange(self.n_fixed_params)
 
     def _rescaled_nonlinearity(self, state_scale, input_scale, output_scale):
         """Wx, Wy, V for :meth:`rescaled`: z = V_n^T s_n = V_n^T S^-1 s, so V
@@ -238,7 +241,7 @@ class DecoupledModel(StateSpaceModel):
         reach = np.abs(self._variables_by_row(states_inputs)).max(axis=1)  # a branch a row
         reach[~(reach > 0)] = 1.0
         basis = np.eye(self.n_params)
-        start = sum(getattr(self, name).size for name in self._block_names[: self._block_names.index("G")])
+        start = self._block_start("G")
         d = self.degree
         legendre_in_powers, powers = legendre_power_matrix(d), np.arange(1, d + 1)[:, None]
         for l, c in enumerate(reach):
