@@ -870,7 +870,7 @@ def _emps_fits(results="field"):
 def _emps_spread():
     """The EMPS model of the increments refitted with other iteration counts
     and one BLAS thread (bench_field.py's spread rows), in their order."""
-    return [r for r in _results("field")["benchmarks"]["emps"]["rows"] if r["model"].startswith(EMPS_PNLSS[1] + ":")]
+    return [r for r in _emps_fits() if r["model"] != EMPS_PNLSS[1]]
 
 
 def _family_s(nominal=None, without=(), name="gap_withheld_family_s"):
