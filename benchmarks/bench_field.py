@@ -15,7 +15,10 @@ fixed before its test run, by what is known of the system (below).
     python benchmarks/bench_field.py [--only NAME ...] [--rows LABEL ...] [--data-dir DIR] [--output FILE]
 
 ``--rows`` refits only the rows of those labels and keeps the others'
-results (as ``--only`` keeps the other benchmarks').
+results (as ``--only`` keeps the other benchmarks'). Each row says when
+and at which commit it was measured (``measured``): the file's own date
+and environment are those of its last run, which may have refitted only
+some rows.
 
 Results go to ``benchmarks/results/field.json``: per benchmark
 ``test_rmse`` (in ``unit``), ``nrmse``, ``fit_percent``, ``fit_s``, the
@@ -32,7 +35,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _bench_utils import REPO, RESULTS, header, write_results  # noqa: E402
+from _bench_utils import REPO, RESULTS, commit_of, header, write_results  # noqa: E402
 
 DEFAULT_DATA = REPO.parent / "shared" / "data"
 DEFAULT_OUTPUT = RESULTS / "field.json"
@@ -182,6 +185,7 @@ def run(name, data_dir, labels=None, previous=None):
     from sklearn_pnlss.metrics import fit_percent, nrmse, rms_error
 
     data = load_benchmark(name, data_dir)
+    measured = {"date": header()["date"], "commit": commit_of()}  # a kept row keeps its own
     rows = []
     kept = {r["model"]: r for r in (previous or {}).get("rows", [])}
     for label, settings, make, *context in models(name):
@@ -196,7 +200,7 @@ def run(name, data_dir, labels=None, previous=None):
                 fit_s = time.perf_counter() - t0
                 pred = model.predict(data.X_test, y_init=data.y_test[:, :data.skip])
         except (ValueError, DivergenceError) as exc:  # a model that cannot be fitted or simulated is a row too
-            rows.append({"model": label, "settings": settings, "error": str(exc)})
+            rows.append({"model": label, "settings": settings, "error": str(exc), "measured": measured})
             print(f"{name:15s} {label:8s} failed: {exc}", flush=True)
             continue
         final = model.regressor_ if hasattr(model, "regressor_") else model
@@ -205,7 +209,7 @@ def run(name, data_dir, labels=None, previous=None):
                "n_params": getattr(final, "n_params_", None),
                "test_rmse": data.report_scale * rms_error(data.y_test, pred, skip=data.skip),
                "nrmse": nrmse(data.y_test, pred, skip=data.skip),
-               "fit_percent": fit_percent(data.y_test, pred, skip=data.skip)}
+               "fit_percent": fit_percent(data.y_test, pred, skip=data.skip), "measured": measured}
         if hasattr(final, "n_iter_"):
             row["n_iter"] = int(final.n_iter_)
         if hasattr(final, "init_scores_"):

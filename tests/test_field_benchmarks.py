@@ -144,3 +144,26 @@ def test_cascaded_tanks_decoupled_branches_over_the_states():
         cpd.fit(data.X_train, data.y_train)
     assert cpd[-1].start_model_.variables == "states" and not cpd[-1].V_[2:].any()
     assert rms_error(data.y_test, cpd.predict(data.X_test, y_init=window), skip=data.skip) < 0.7
+
+
+def test_bench_field_rows_say_when_they_were_measured():
+    """``bench_field.py --rows``: the refitted row carries its own date and
+    commit; a kept row stays as the earlier run left it (the file's header
+    is only its last run's)."""
+    import sys
+
+    if not (DATA / "cascaded_tanks").is_dir():
+        pytest.skip("benchmark data not present")
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+    try:
+        from bench_field import models, run
+    finally:
+        sys.path.pop(0)
+    earlier = [{"model": label, "measured": {"date": "2026-01-01", "commit": "0000000"}}
+               for label, *_ in models("cascaded_tanks")]
+    result = run("cascaded_tanks", DATA, labels=["BLA"], previous={"rows": earlier})
+    rows = {row["model"]: row for row in result["rows"]}
+    assert all(rows[row["model"]] is row for row in earlier if row["model"] != "BLA")
+    fresh = rows["BLA"]
+    assert fresh["measured"]["date"] > "2026-01-01" and len(fresh["measured"]["commit"]) >= 7
+    assert 0.6 < fresh["test_rmse"] < 0.7  # volts: the BLA's 0.664 V
