@@ -3,7 +3,7 @@ linear recurrent units (``LRUAboveBandRegressor``), trained on the
 estimation levels' multisines and sine sweeps (issue 35).
 
     python benchmarks/f16_lru.py [--draws 0 1 2 3] [--single 0] [--network KEY=VALUE ...]
-        [--above-band networks|ROUTE] [--data-dir DIR] [--output FILE]
+        [--member KEY=VALUE ...] [--above-band networks|ROUTE] [--data-dir DIR] [--output FILE]
 
 The model of the band is a decoupled model
 (``DecoupledPNLSSRegressor(18, n_branches=3, degree=3,
@@ -31,7 +31,9 @@ members and networks are what the two cores fit side by side (two draws
 of two members with one network each spread from 0.127 to 0.137);
 nothing else was chosen on the test levels. ``--network`` changes a setting
 of the networks (``LRUAboveBandRegressor``'s) to measure a variant on the
-same draws (``--draws 0 --network n_layers=1 --output /tmp/one_layer.json``).
+same draws (``--draws 0 --network n_layers=1 --output /tmp/one_layer.json``),
+``--member`` a setting of the averaged draws' members (``--member
+stable_at_rest=True``).
 ``--above-band`` puts one of ``f16_clearances.py``'s linear routes above
 the same models of the band instead of the networks (``--above-band "gated
 filters and hinges, with the sweeps"``): what the networks add, on the
@@ -122,17 +124,20 @@ def decoupled(degree):
             {"n_states": STATES, "n_branches": BRANCHES, "degree": degree, "branch_basis": BASIS})
 
 
-def averaged(seed):
+def averaged(seed, member_settings=None):
     """Draw ``seed``'s model of the band: the mean of N_MEMBERS fits, each
     the better of MEMBER_STARTS random starts, seeded ``N_MEMBERS seed``
-    on, side by side."""
+    on, side by side; ``member_settings`` changes the members' settings."""
     from sklearn_pnlss import AveragedRegressor
 
+    member_settings = member_settings or {}
     member = bench_f16.decoupled_estimator(STATES, BRANCHES, MEMBER_DEGREE, branch_basis=BASIS,
-                                           n_init=MEMBER_STARTS)
+                                           n_init=MEMBER_STARTS).set_params(**member_settings)
     described, settings = decoupled(MEMBER_DEGREE)
-    name = f"AveragedRegressor({N_MEMBERS} x {described}, n_init={MEMBER_STARTS})"
-    settings = {**settings, "n_init": MEMBER_STARTS, "n_estimators": N_MEMBERS, "random_state": N_MEMBERS * seed}
+    extra = "".join(f", {k}={v!r}" for k, v in member_settings.items())
+    name = f"AveragedRegressor({N_MEMBERS} x {described}, n_init={MEMBER_STARTS}{extra})"
+    settings = {**settings, "n_init": MEMBER_STARTS, **member_settings, "n_estimators": N_MEMBERS,
+                "random_state": N_MEMBERS * seed}
     # each member's starts in threads too: the four starts share the two cores, so a member whose fit ends
     # early leaves its core to the other (draw 0: 75 s against 90 s with each member's starts in turn, the
     # same members bit for bit)
@@ -158,21 +163,28 @@ def main(argv=None):
                         help="the single fits' draws (the better of two starts)")
     parser.add_argument("--network", action="append", default=[], metavar="KEY=VALUE",
                         help="a setting of the networks (LRUAboveBandRegressor's), a Python literal or text")
+    parser.add_argument("--member", action="append", default=[], metavar="KEY=VALUE",
+                        help="a setting of the averaged draws' members (DecoupledPNLSSRegressor's)")
     parser.add_argument("--above-band", choices=[NETWORKS, *ROUTES], default=NETWORKS,
                         help="above the band: the networks, or one of f16_clearances.py's linear routes")
     parser.add_argument("--output", default=RESULTS / "f16_lru.json")
     args = parser.parse_args(argv)
     if args.network and args.above_band != NETWORKS:
         parser.error(f"--network sets the networks, which --above-band {args.above_band!r} replaces; drop one of them")
+    if any("=" not in kv for kv in args.network + args.member):
+        parser.error("--network and --member take KEY=VALUE")
     network_settings = {k: setting_value(v) for k, v in (kv.split("=", 1) for kv in args.network)}
+    member_settings = {k: setting_value(v) for k, v in (kv.split("=", 1) for kv in args.member)}
 
     X, y, test, train_sweeps, start, start_s = load_and_start(args.data_dir)
     results = {**header(), "protocol": {"train_levels": bench_f16.TRAIN_LEVELS, "test_levels": bench_f16.TEST_LEVELS},
                "published": bench_f16.PUBLISHED, "start_s": start_s, "network_settings": network_settings,
+               "member_settings": member_settings,
                "above_band": args.above_band,
                "draws": [], "single": [], "averages": []}
     members = {}
-    for kind, seeds, model_of in (("draws", args.draws, averaged), ("single", args.single, single)):
+    for kind, seeds, model_of in (("draws", args.draws, lambda seed: averaged(seed, member_settings)),
+                                  ("single", args.single, single)):
         for seed in seeds:
             print(f"{kind}: draw {seed}", flush=True)
             rows, fitted = draw_rows(*model_of(seed), start, start_s, X, y, train_sweeps, test, seed,
