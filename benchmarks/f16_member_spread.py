@@ -53,7 +53,7 @@ def fit_draw(draw, Xs, y, check_records, check_outputs, member_settings):
     """Draw ``draw``'s two members, fitted side by side as f16_lru.py's
     draws fit them but for ``member_settings``, with the fits' warnings
     about the kept iterate."""
-    averaged = f16_lru.averaged(draw)[2].set_params(**{f"regressor__{k}": v for k, v in member_settings.items()})
+    averaged = f16_lru.averaged(draw, member_settings)[2]
     t0 = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
