@@ -476,11 +476,17 @@ def _clearances_mean(k, route):
                 if r["model"]["route"] == route and len(r["model"]["draws"]) == k)
 
 
-def _lru(seed, network=True, kind="draws"):
+def _draw_rows(seed, kind="draws", results="f16_lru"):
+    """f16_lru.py's rows of one draw (``results``: the file of another run
+    of it)."""
+    return next(d["rows"] for d in _results(results)[kind] if d["random_state"] == seed)
+
+
+def _lru(seed, network=True, kind="draws", results="f16_lru"):
     """f16_lru.py: one draw's row (``kind``: "draws", the mean of two
     single-start fits; "single", the better of two starts), with the
     network above the band or the model alone."""
-    rows = next(d["rows"] for d in _results("f16_lru")[kind] if d["random_state"] == seed)
+    rows = _draw_rows(seed, kind, results)
     return next(r for r in rows if r["model"]["estimator"].startswith("LRUAboveBandRegressor") == network)
 
 
@@ -513,18 +519,20 @@ def _jumpers(spread):
     return sum(m["estimation_sweeps_in_band_mean"] > 1 for m in spread["members"])
 
 
+# f16_lru.py --member stable_at_rest=True, the k-th pair of draws (0: draws 0 and 1, 1: draws 2 and 3)
+STABLE_RESULTS = ("f16_lru_stable_at_rest", "f16_lru_stable_at_rest_draws_2_3")
+
+
 def _lru_stable(k):
     """f16_lru.py --member stable_at_rest=True: the mean of the ``k``-th
-    pair of draws (0: draws 0 and 1, 1: draws 2 and 3)."""
-    return _results(("f16_lru_stable_at_rest", "f16_lru_stable_at_rest_draws_2_3")[k])["averages"][0]
+    pair of draws."""
+    return _results(STABLE_RESULTS[k])["averages"][0]
 
 
 def _stable_draw(seed):
     """f16_lru.py --member stable_at_rest=True: draw ``seed``'s row with
     its networks."""
-    name = ("f16_lru_stable_at_rest", "f16_lru_stable_at_rest_draws_2_3")[seed // 2]
-    rows = next(d["rows"] for d in _results(name)["draws"] if d["random_state"] == seed)
-    return next(row for row in rows if row["model"]["estimator"].startswith("LRUAboveBandRegressor"))
+    return _lru(seed, results=STABLE_RESULTS[seed // 2])
 
 
 def _stable_draw_rows_equal(seed):
@@ -533,7 +541,7 @@ def _stable_draw_rows_equal(seed):
     draw of bench_f16.py's run, the same code; f16_lru.json's is older);
     else NaN, which no quote matches."""
     free = [row for row in _results("f16")["draws"] if row["model"]["estimator"].endswith(f", draw {seed}")]
-    stable = next(d["rows"] for d in _results("f16_lru_stable_at_rest")["draws"] if d["random_state"] == seed)
+    stable = _draw_rows(seed, results=STABLE_RESULTS[seed // 2])
     same = all(a["nrmse"] == b["nrmse"] for a, b in zip(free, stable, strict=True))
     return [] if same else [math.nan]
 
